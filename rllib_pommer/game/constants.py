@@ -1,0 +1,124 @@
+"""Codes and presets of the Pommerman game, as the reference implementation numbers them.
+
+The integer values are part of the recorded-game schema (../shared/reference/README.md §1), so they
+are fixed here once and every other module imports them by name.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import IntEnum
+
+import numpy as np
+
+
+class Item(IntEnum):
+    """Values stored in a board cell."""
+
+    PASSAGE = 0
+    RIGID = 1
+    WOOD = 2
+    BOMB = 3
+    FLAMES = 4
+    FOG = 5
+    EXTRA_BOMB = 6
+    INCR_RANGE = 7
+    KICK = 8
+    AGENT_DUMMY = 9
+    AGENT0 = 10
+    AGENT1 = 11
+    AGENT2 = 12
+    AGENT3 = 13
+
+
+class Action(IntEnum):
+    """The six actions; 1..4 are also the bomb moving directions."""
+
+    STOP = 0
+    UP = 1
+    DOWN = 2
+    LEFT = 3
+    RIGHT = 4
+    BOMB = 5
+
+
+class Result(IntEnum):
+    WIN = 0
+    LOSS = 1
+    TIE = 2
+    INCOMPLETE = 3
+
+
+class GameType(IntEnum):
+    FFA = 1
+    TEAM = 2
+
+
+NUM_AGENTS = 4
+NUM_ACTIONS = 6
+MAX_AMMO = 10
+BOMB_LIFE_AT_LAYING = 10
+FLAME_LIFE_AT_CREATION = 2
+DEFAULT_BLAST_STRENGTH = 2
+DEFAULT_AMMO = 1
+# (row, col) displacement of each action code; Stop and Bomb do not move.
+ACTION_DR = np.array([0, -1, 1, 0, 0, 0], dtype=np.int64)
+ACTION_DC = np.array([0, 0, 0, -1, 1, 0], dtype=np.int64)
+START_POSITIONS = ((1, 1), (9, 1), (9, 9), (1, 9))
+GAME_ENV_STRING = "pommerman.envs.v0:Pomme"
+
+# Capacities of the fixed-shape state arrays. Bombs never share a cell, and a cell holds at most
+# three flame records (created on three consecutive steps), so these bound any reachable state.
+MAX_BOMBS = 121
+MAX_FLAMES = 3 * 121
+MAX_ITEMS = 121
+
+
+@dataclass(frozen=True)
+class GameConfig:
+    """A game preset: board size, wall and item counts, observability and the step limit."""
+
+    name: str
+    env_id: str
+    game_type: GameType
+    board_size: int = 11
+    num_rigid: int = 36
+    num_wood: int = 36
+    num_items: int = 20
+    view_radius: int = -1  # -1: fully observable
+    max_steps: int = 800
+
+    @property
+    def blast_cap(self) -> int:
+        """IncrRange cap: the reference passes 'view size, or 10 if unset' (rules §1.4 quirk)."""
+        return self.view_radius if self.view_radius > 0 else 10
+
+
+TEAM = GameConfig("team", "PommeTeamCompetition-v0", GameType.TEAM, view_radius=4)
+FFA = GameConfig("ffa", "PommeFFACompetition-v0", GameType.FFA)
+PRESETS = {"team": TEAM, "ffa": FFA}
+CONFIG_BY_ENV_ID = {TEAM.env_id: TEAM, FFA.env_id: FFA}
+
+
+def preset(name: str) -> GameConfig:
+    """The preset called `name`, or a ValueError listing the valid names."""
+    try:
+        return PRESETS[name]
+    except KeyError:
+        raise ValueError(f"unknown game preset {name!r}; valid: {sorted(PRESETS)}") from None
+
+
+def teammate_of(agent_id: int, game_type: int) -> int:
+    """Item code of the teammate (AgentDummy in FFA)."""
+    if game_type == GameType.TEAM:
+        return Item.AGENT0 + (agent_id + 2) % NUM_AGENTS
+    return int(Item.AGENT_DUMMY)
+
+
+def enemies_of(agent_id: int, game_type: int) -> list[int]:
+    """Item codes of the enemies, in the reference's order (Team appends AgentDummy)."""
+    if game_type == GameType.TEAM:
+        return [Item.AGENT0 + i for i in range(NUM_AGENTS) if i % 2 != agent_id % 2] + [
+            int(Item.AGENT_DUMMY)
+        ]
+    return [Item.AGENT0 + i for i in range(NUM_AGENTS) if i != agent_id]
