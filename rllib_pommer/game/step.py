@@ -1,0 +1,485 @@
+"""The forward model: one step of one game, compiled, in the reference's exact sub-step order.
+
+Each function mirrors a sub-step of ../shared/docs/pommerman-rules.md §3 and says which. The claim
+counters and both settle loops reproduce the reference's quirks on purpose (counters that only grow,
+agent-bomb crossings that bounce only the bomb, boomerang and diagonal kicks): fidelity is checked
+by replaying the recorded reference games (`python -m rllib_pommer.replay verify`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .blast import mark_blast
+from .state import (
+    A_ALIVE,
+    A_AMMO,
+    A_BLAST,
+    A_COL,
+    A_KICK,
+    A_ROW,
+    B_BLAST,
+    B_COL,
+    B_DIR,
+    B_LIFE,
+    B_OWNER,
+    B_ROW,
+    F_COL,
+    F_LIFE,
+    F_ROW,
+    I_CODE,
+    I_COL,
+    I_ROW,
+    M_BOMBS,
+    M_DONE,
+    M_FLAMES,
+    M_ITEMS,
+    M_STEP,
+)
+
+PASSAGE, RIGID, WOOD, BOMB, FLAMES = 0, 1, 2, 3, 4
+EXTRA_BOMB, INCR_RANGE, KICK = 6, 7, 8
+AGENT0 = 10
+STOP, BOMB_ACTION = 0, 5
+MAX_AMMO = 10
+BOMB_LIFE = 10
+FLAME_LIFE = 2
+TEAM = 2
+RESULT_WIN, RESULT_TIE, RESULT_INCOMPLETE = 0, 2, 3
+
+DR = np.array([0, -1, 1, 0, 0, 0], dtype=np.int64)
+DC = np.array([0, 0, 0, -1, 1, 0], dtype=np.int64)
+
+
+@njit(cache=True, inline="always")
+def _is_power_up(code):
+    return code == EXTRA_BOMB or code == INCR_RANGE or code == KICK
+
+
+@njit(cache=True, inline="always")
+def _is_wall(code):
+    return code == RIGID or code == WOOD
+
+
+@njit(cache=True)
+def _age_flames(board, flames, items, meta):
+    """§3.1: drop flames of life 0 (revealing a hidden item), tick the rest, redraw them."""
+    kept = 0
+    for i in range(meta[M_FLAMES]):
+        r, c, life = flames[i, F_ROW], flames[i, F_COL], flames[i, F_LIFE]
+        if life == 0:
+            board[r, c] = PASSAGE
+            n_items = meta[M_ITEMS]
+            for k in range(n_items):
+                if items[k, I_ROW] == r and items[k, I_COL] == c:
+                    board[r, c] = items[k, I_CODE]
+                    for j in range(k, n_items - 1):
+                        items[j] = items[j + 1]
+                    meta[M_ITEMS] = n_items - 1
+                    break
+        else:
+            flames[kept, F_ROW] = r
+            flames[kept, F_COL] = c
+            flames[kept, F_LIFE] = life - 1
+            kept += 1
+    meta[M_FLAMES] = kept
+    for i in range(kept):
+        board[flames[i, F_ROW], flames[i, F_COL]] = FLAMES
+
+
+@njit(cache=True)
+def _agent_intents(board, agents, bombs, meta, actions, want):
+    """§3.2: clear agents' cells, lay bombs, and set each living agent's wanted cell."""
+    size = board.shape[0]
+    for a in range(4):
+        if agents[a, A_ALIVE] == 0:
+            continue
+        r, c = agents[a, A_ROW], agents[a, A_COL]
+        want[a, 0], want[a, 1] = r, c
+        board[r, c] = PASSAGE
+        action = actions[a]
+        if action == BOMB_ACTION:
+            n_bombs = meta[M_BOMBS]
+            occupied = False
+            for b in range(n_bombs):
+                if bombs[b, B_ROW] == r and bombs[b, B_COL] == c:
+                    occupied = True
+                    break
+            if not occupied and agents[a, A_AMMO] > 0:
+                agents[a, A_AMMO] -= 1
+                bombs[n_bombs, B_ROW] = r
+                bombs[n_bombs, B_COL] = c
+                bombs[n_bombs, B_OWNER] = a
+                bombs[n_bombs, B_LIFE] = BOMB_LIFE
+                bombs[n_bombs, B_BLAST] = agents[a, A_BLAST]
+                bombs[n_bombs, B_DIR] = 0
+                meta[M_BOMBS] = n_bombs + 1
+        elif action != STOP:
+            tr, tc = r + DR[action], c + DC[action]
+            if 0 <= tr < size and 0 <= tc < size and not _is_wall(board[tr, tc]):
+                want[a, 0], want[a, 1] = tr, tc
+
+
+@njit(cache=True)
+def _bomb_intents(board, bombs, n_bombs, bwant):
+    """§3.3: clear bombs' cells and set each moving bomb's wanted cell."""
+    size = board.shape[0]
+    for b in range(n_bombs):
+        r, c = bombs[b, B_ROW], bombs[b, B_COL]
+        bwant[b, 0], bwant[b, 1] = r, c
+        board[r, c] = PASSAGE
+        d = bombs[b, B_DIR]
+        if d != 0:
+            tr, tc = r + DR[d], c + DC[d]
+            if 0 <= tr < size and 0 <= tc < size:
+                code = board[tr, tc]
+                if not _is_power_up(code) and not _is_wall(code):
+                    bwant[b, 0], bwant[b, 1] = tr, tc
+
+
+@njit(cache=True, inline="always")
+def _edge_key(size, r0, c0, r1, c1):
+    p = r0 * size + c0
+    q = r1 * size + c1
+    return min(p, q) * size * size + max(p, q)
+
+
+@njit(cache=True)
+def _resolve_crossings(size, agents, bombs, n_bombs, want, bwant):
+    """§3.4: agents (then bombs) swapping cells along one edge are sent back.
+
+    An agent-bomb crossing sends back only the bomb; the agent then meets the bomb in the kick pass.
+    """
+    keys = np.empty(4 + n_bombs, np.int64)
+    owners = np.empty(4 + n_bombs, np.int64)
+    is_agent = np.empty(4 + n_bombs, np.bool_)
+    n = 0
+    for a in range(4):
+        if agents[a, A_ALIVE] == 0:
+            continue
+        r, c = agents[a, A_ROW], agents[a, A_COL]
+        if want[a, 0] == r and want[a, 1] == c:
+            continue
+        key = _edge_key(size, r, c, want[a, 0], want[a, 1])
+        found = -1
+        for k in range(n):
+            if keys[k] == key:
+                found = k
+                break
+        if found >= 0:
+            want[a, 0], want[a, 1] = r, c
+            other = owners[found]
+            want[other, 0], want[other, 1] = agents[other, A_ROW], agents[other, A_COL]
+        else:
+            keys[n], owners[n], is_agent[n] = key, a, True
+            n += 1
+    for b in range(n_bombs):
+        r, c = bombs[b, B_ROW], bombs[b, B_COL]
+        if bwant[b, 0] == r and bwant[b, 1] == c:
+            continue
+        key = _edge_key(size, r, c, bwant[b, 0], bwant[b, 1])
+        found = -1
+        for k in range(n):
+            if keys[k] == key:
+                found = k
+                break
+        if found >= 0:
+            bwant[b, 0], bwant[b, 1] = r, c
+            if not is_agent[found]:
+                other = owners[found]
+                bwant[other, 0], bwant[other, 1] = bombs[other, B_ROW], bombs[other, B_COL]
+        else:
+            keys[n], owners[n], is_agent[n] = key, b, False
+            n += 1
+
+
+@njit(cache=True, inline="always")
+def _agent_moves(agents, want, a):
+    return want[a, 0] != agents[a, A_ROW] or want[a, 1] != agents[a, A_COL]
+
+
+@njit(cache=True, inline="always")
+def _bomb_moves(bombs, bwant, b):
+    return bwant[b, 0] != bombs[b, B_ROW] or bwant[b, 1] != bombs[b, B_COL]
+
+
+@njit(cache=True)
+def _first_settle(agents, bombs, n_bombs, want, bwant, ao, bo):
+    """§3.6: movers into a cell claimed more than once go back, until nothing changes."""
+    changed = True
+    while changed:
+        changed = False
+        for a in range(4):
+            if agents[a, A_ALIVE] == 0 or not _agent_moves(agents, want, a):
+                continue
+            if ao[want[a, 0], want[a, 1]] > 1 or bo[want[a, 0], want[a, 1]] > 1:
+                want[a, 0], want[a, 1] = agents[a, A_ROW], agents[a, A_COL]
+                ao[want[a, 0], want[a, 1]] += 1
+                changed = True
+        for b in range(n_bombs):
+            if not _bomb_moves(bombs, bwant, b):
+                continue
+            if bo[bwant[b, 0], bwant[b, 1]] > 1 or ao[bwant[b, 0], bwant[b, 1]] > 1:
+                bwant[b, 0], bwant[b, 1] = bombs[b, B_ROW], bombs[b, B_COL]
+                bo[bwant[b, 0], bwant[b, 1]] += 1
+                changed = True
+
+
+@njit(cache=True)
+def _kick_pass(board, agents, bombs, n_bombs, actions, want, bwant, ao, bo, kicker_of, kicked_by):
+    """§3.7: an agent meeting a bomb kicks it if it can and the cell beyond is free.
+
+    Resets are deferred to the end of the pass (so two kicks may approve one target; the second
+    settle loop undoes both). Returns whether anything was deferred.
+    """
+    size = board.shape[0]
+    defer_bomb = np.empty((n_bombs, 3), np.int64)
+    defer_agent = np.empty((n_bombs, 3), np.int64)
+    n_defer_bomb = 0
+    n_defer_agent = 0
+    for b in range(n_bombs):
+        dr, dc = bwant[b, 0], bwant[b, 1]
+        if ao[dr, dc] == 0:
+            continue
+        a = -1
+        for i in range(4):
+            if agents[i, A_ALIVE] != 0 and want[i, 0] == dr and want[i, 1] == dc:
+                a = i
+                break
+        if a < 0:
+            continue
+        bomb_row, bomb_col = bombs[b, B_ROW], bombs[b, B_COL]
+        if not _agent_moves(agents, want, a):
+            if _bomb_moves(bombs, bwant, b):
+                defer_bomb[n_defer_bomb, 0], defer_bomb[n_defer_bomb, 1], defer_bomb[n_defer_bomb, 2] = b, bomb_row, bomb_col
+                n_defer_bomb += 1
+            continue
+        kicked = False
+        if agents[a, A_KICK] != 0:
+            direction = actions[a]
+            tr, tc = dr + DR[direction], dc + DC[direction]
+            if (
+                0 <= tr < size
+                and 0 <= tc < size
+                and ao[tr, tc] == 0
+                and bo[tr, tc] == 0
+                and not _is_power_up(board[tr, tc])
+                and not _is_wall(board[tr, tc])
+            ):
+                bo[dr, dc] = 0
+                defer_bomb[n_defer_bomb, 0], defer_bomb[n_defer_bomb, 1], defer_bomb[n_defer_bomb, 2] = b, tr, tc
+                n_defer_bomb += 1
+                kicker_of[a] = b
+                kicked_by[b] = a
+                bombs[b, B_DIR] = direction
+                kicked = True
+        if not kicked:
+            defer_bomb[n_defer_bomb, 0], defer_bomb[n_defer_bomb, 1], defer_bomb[n_defer_bomb, 2] = b, bomb_row, bomb_col
+            n_defer_bomb += 1
+            defer_agent[n_defer_agent, 0], defer_agent[n_defer_agent, 1], defer_agent[n_defer_agent, 2] = a, agents[a, A_ROW], agents[a, A_COL]
+            n_defer_agent += 1
+    for k in range(n_defer_bomb):
+        b, r, c = defer_bomb[k, 0], defer_bomb[k, 1], defer_bomb[k, 2]
+        bwant[b, 0], bwant[b, 1] = r, c
+        bo[r, c] += 1
+    for k in range(n_defer_agent):
+        a, r, c = defer_agent[k, 0], defer_agent[k, 1], defer_agent[k, 2]
+        want[a, 0], want[a, 1] = r, c
+        ao[r, c] += 1
+    return n_defer_bomb + n_defer_agent > 0
+
+
+@njit(cache=True)
+def _second_settle(agents, bombs, n_bombs, want, bwant, ao, bo, kicker_of, kicked_by):
+    """§3.8: stricter loop after kicks; any bomb claim now blocks an agent, any agent a bomb."""
+    changed = True
+    while changed:
+        changed = False
+        for a in range(4):
+            if agents[a, A_ALIVE] == 0 or not _agent_moves(agents, want, a):
+                continue
+            if ao[want[a, 0], want[a, 1]] > 1 or bo[want[a, 0], want[a, 1]] != 0:
+                b = kicker_of[a]
+                if b >= 0:
+                    bwant[b, 0], bwant[b, 1] = bombs[b, B_ROW], bombs[b, B_COL]
+                    bo[bwant[b, 0], bwant[b, 1]] += 1
+                    kicked_by[b] = -1
+                    kicker_of[a] = -1
+                want[a, 0], want[a, 1] = agents[a, A_ROW], agents[a, A_COL]
+                ao[want[a, 0], want[a, 1]] += 1
+                changed = True
+        for b in range(n_bombs):
+            if not _bomb_moves(bombs, bwant, b) and kicked_by[b] < 0:
+                continue
+            if bo[bwant[b, 0], bwant[b, 1]] > 1 or ao[bwant[b, 0], bwant[b, 1]] != 0:
+                bwant[b, 0], bwant[b, 1] = bombs[b, B_ROW], bombs[b, B_COL]
+                bo[bwant[b, 0], bwant[b, 1]] += 1
+                a = kicked_by[b]
+                if a >= 0:
+                    want[a, 0], want[a, 1] = agents[a, A_ROW], agents[a, A_COL]
+                    ao[want[a, 0], want[a, 1]] += 1
+                    kicked_by[b] = -1
+                    kicker_of[a] = -1
+                changed = True
+
+
+@njit(cache=True)
+def _commit_moves(board, agents, bombs, n_bombs, actions, want, bwant, kicked_by, blast_cap):
+    """§3.9-3.10: move bombs (a blocked bomb stops for good), then agents, who pick up power-ups."""
+    for b in range(n_bombs):
+        if not _bomb_moves(bombs, bwant, b) and kicked_by[b] < 0:
+            bombs[b, B_DIR] = 0
+        else:
+            bombs[b, B_ROW], bombs[b, B_COL] = bwant[b, 0], bwant[b, 1]
+    for a in range(4):
+        if agents[a, A_ALIVE] == 0 or not _agent_moves(agents, want, a):
+            continue
+        r = agents[a, A_ROW] + DR[actions[a]]
+        c = agents[a, A_COL] + DC[actions[a]]
+        agents[a, A_ROW], agents[a, A_COL] = r, c
+        code = board[r, c]
+        if code == EXTRA_BOMB:
+            agents[a, A_AMMO] = min(agents[a, A_AMMO] + 1, MAX_AMMO)
+        elif code == INCR_RANGE:
+            agents[a, A_BLAST] = min(agents[a, A_BLAST] + 1, blast_cap)
+        elif code == KICK:
+            agents[a, A_KICK] = 1
+
+
+@njit(cache=True)
+def _explode(board, agents, bombs, meta, fire):
+    """§3.11-3.12: tick bombs; detonate (in waves, chains included) into the mask `fire`."""
+    n_bombs = meta[M_BOMBS]
+    pending = False
+    for b in range(n_bombs):
+        bombs[b, B_LIFE] -= 1
+        if bombs[b, B_LIFE] == 0:
+            pending = True
+        elif board[bombs[b, B_ROW], bombs[b, B_COL]] == FLAMES:
+            bombs[b, B_LIFE] = 0
+            pending = True
+    while pending:
+        pending = False
+        kept = 0
+        for b in range(n_bombs):
+            if bombs[b, B_LIFE] != 0:
+                bombs[kept] = bombs[b]
+                kept += 1
+                continue
+            owner = bombs[b, B_OWNER]
+            agents[owner, A_AMMO] = min(agents[owner, A_AMMO] + 1, MAX_AMMO)
+            mark_blast(board, fire, bombs[b, B_ROW], bombs[b, B_COL], bombs[b, B_BLAST])
+        n_bombs = kept
+        for b in range(n_bombs):
+            if fire[bombs[b, B_ROW], bombs[b, B_COL]] != 0:
+                bombs[b, B_LIFE] = 0
+                pending = True
+    meta[M_BOMBS] = n_bombs
+
+
+@njit(cache=True)
+def _redraw(board, agents, bombs, flames, meta, fire, was_alive):
+    """§3.13: draw bombs, add and draw flames, then agents; an agent on Flames dies."""
+    size = board.shape[0]
+    for b in range(meta[M_BOMBS]):
+        board[bombs[b, B_ROW], bombs[b, B_COL]] = BOMB
+    n_flames = meta[M_FLAMES]
+    for r in range(size):
+        for c in range(size):
+            if fire[r, c] != 0:
+                flames[n_flames, F_ROW] = r
+                flames[n_flames, F_COL] = c
+                flames[n_flames, F_LIFE] = FLAME_LIFE
+                n_flames += 1
+    meta[M_FLAMES] = n_flames
+    for i in range(n_flames):
+        board[flames[i, F_ROW], flames[i, F_COL]] = FLAMES
+    for a in range(4):
+        if not was_alive[a]:
+            continue
+        r, c = agents[a, A_ROW], agents[a, A_COL]
+        if board[r, c] == FLAMES:
+            agents[a, A_ALIVE] = 0
+        else:
+            board[r, c] = AGENT0 + a
+
+
+@njit(cache=True)
+def _score(agents, meta, game_type, max_steps, rewards):
+    """§4: done flag, rewards by agent id and the result code, after the step counter moved."""
+    n_alive = 0
+    alive_mask = 0
+    for a in range(4):
+        if agents[a, A_ALIVE] != 0:
+            n_alive += 1
+            alive_mask |= 1 << a
+    timeout = meta[M_STEP] >= max_steps
+    if game_type == TEAM:
+        team_a_only = alive_mask != 0 and (alive_mask & 0b1010) == 0
+        team_b_only = alive_mask != 0 and (alive_mask & 0b0101) == 0
+        done = timeout or n_alive <= 1 or team_a_only or team_b_only
+        if team_a_only:
+            for a in range(4):
+                rewards[a] = 1 if a % 2 == 0 else -1
+        elif team_b_only:
+            for a in range(4):
+                rewards[a] = 1 if a % 2 == 1 else -1
+        elif timeout or n_alive == 0:
+            rewards[:] = -1
+        else:
+            rewards[:] = 0
+    else:
+        done = timeout or n_alive <= 1
+        for a in range(4):
+            if n_alive == 1:
+                rewards[a] = 1 if agents[a, A_ALIVE] != 0 else -1
+            elif timeout:
+                rewards[a] = -1
+            else:
+                rewards[a] = 0 if agents[a, A_ALIVE] != 0 else -1
+    if not done:
+        return RESULT_INCOMPLETE
+    for a in range(4):
+        if rewards[a] == 1:
+            return RESULT_WIN
+    return RESULT_TIE
+
+
+@njit(cache=True)
+def step_game(board, agents, bombs, flames, items, meta, actions, rewards, game_type, max_steps,
+              blast_cap):
+    """Advance one game by one step in place; fill `rewards` (4,) and return the result code.
+
+    Dead agents' actions are ignored. The caller validates actions and never steps a done game.
+    """
+    size = board.shape[0]
+    was_alive = agents[:, A_ALIVE] != 0
+    _age_flames(board, flames, items, meta)
+    want = np.empty((4, 2), np.int64)
+    _agent_intents(board, agents, bombs, meta, actions, want)
+    n_bombs = meta[M_BOMBS]
+    bwant = np.empty((n_bombs, 2), np.int64)
+    _bomb_intents(board, bombs, n_bombs, bwant)
+    _resolve_crossings(size, agents, bombs, n_bombs, want, bwant)
+    ao = np.zeros((size, size), np.int64)
+    bo = np.zeros((size, size), np.int64)
+    for a in range(4):
+        if agents[a, A_ALIVE] != 0:
+            ao[want[a, 0], want[a, 1]] += 1
+    for b in range(n_bombs):
+        bo[bwant[b, 0], bwant[b, 1]] += 1
+    _first_settle(agents, bombs, n_bombs, want, bwant, ao, bo)
+    kicker_of = np.full(4, -1, np.int64)
+    kicked_by = np.full(n_bombs, -1, np.int64)
+    if _kick_pass(board, agents, bombs, n_bombs, actions, want, bwant, ao, bo, kicker_of,
+                  kicked_by):
+        _second_settle(agents, bombs, n_bombs, want, bwant, ao, bo, kicker_of, kicked_by)
+    _commit_moves(board, agents, bombs, n_bombs, actions, want, bwant, kicked_by, blast_cap)
+    fire = np.zeros((size, size), np.uint8)
+    _explode(board, agents, bombs, meta, fire)
+    _redraw(board, agents, bombs, flames, meta, fire, was_alive)
+    meta[M_STEP] += 1
+    result = _score(agents, meta, game_type, max_steps, rewards)
+    meta[M_DONE] = result != RESULT_INCOMPLETE
+    return result
