@@ -107,7 +107,7 @@ class Games:
         indices = range(self.num_games) if indices is None else indices
         if len(seeds) != len(indices):
             raise ValueError(f"reset: {len(seeds)} seeds for {len(indices)} games")
-        for index, seed in zip(indices, seeds):
+        for index, seed in zip(indices, seeds, strict=True):
             reset_game(self.state, index, np.random.default_rng(seed), self.config)
             self.rewards[index] = 0
             self.results[index] = Result.INCOMPLETE

@@ -1,4 +1,6 @@
-"""Board generation with the reference's distribution and invariants (rules §2), from a numpy Generator.
+"""Board generation with the reference's distribution and invariants (rules §2).
+
+Randomness comes from a numpy Generator only.
 
 The reference picks mirror pairs of cells one at a time; a uniform pick among the remaining pairs
 is the same as a uniform permutation of all pairs, so the 18 rigid and 12 wood pairs are the first
@@ -12,9 +14,15 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .constants import NUM_AGENTS, START_POSITIONS, GameConfig, Item
-from .state import A_AMMO, A_BLAST, A_COL, A_ROW, M_ITEMS, GameState, A_ALIVE
-from .constants import DEFAULT_AMMO, DEFAULT_BLAST_STRENGTH
+from .constants import (
+    DEFAULT_AMMO,
+    DEFAULT_BLAST_STRENGTH,
+    NUM_AGENTS,
+    START_POSITIONS,
+    GameConfig,
+    Item,
+)
+from .state import A_ALIVE, A_AMMO, A_BLAST, A_COL, A_ROW, M_ITEMS, GameState
 
 MAX_UNREACHABLE_PASSAGES = 4
 
@@ -43,7 +51,7 @@ _SKELETON, _PAIR_LIST, _PAIRS = _layout(11)
 
 @njit(cache=True)
 def count_unreachable_passages(board, start_row, start_col):
-    """Passage cells a 4-way flood fill from the start, through anything but Rigid, never reaches."""
+    """Passage cells that a 4-way flood fill from the start (through all but Rigid) misses."""
     size = board.shape[0]
     seen = np.zeros((size, size), np.bool_)
     queue = np.empty((size * size, 2), np.int64)
@@ -67,7 +75,9 @@ def count_unreachable_passages(board, start_row, start_col):
     return missed
 
 
-def generate_board(rng: np.random.Generator, config: GameConfig) -> tuple[np.ndarray, np.ndarray]:
+def generate_board(
+    rng: np.random.Generator, config: GameConfig
+) -> tuple[np.ndarray, np.ndarray]:
     """A new board and its hidden items (rows [row, col, code] in placement order)."""
     if config.board_size != 11 or config.num_rigid != 36 or config.num_wood != 36:
         raise ValueError(f"board generation supports the 11x11 presets only, not {config.name!r}")

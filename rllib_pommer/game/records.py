@@ -52,7 +52,8 @@ def write_games(path: str | Path, records: Iterable[dict]) -> int:
 def config_of(record: dict) -> GameConfig:
     env_id = record.get("env_id")
     if env_id not in CONFIG_BY_ENV_ID:
-        raise ValueError(f"game record: unknown env_id {env_id!r}; valid: {sorted(CONFIG_BY_ENV_ID)}")
+        valid = sorted(CONFIG_BY_ENV_ID)
+        raise ValueError(f"game record: unknown env_id {env_id!r}; valid: {valid}")
     return CONFIG_BY_ENV_ID[env_id]
 
 

@@ -234,7 +234,9 @@ def load_observation(d: Mapping, agent_id: int) -> Observation:
         **maps,
         position=np.array(_cell(_field(d, "position", where), f"{where}.position", size), np.int32),
         ammo=np.int32(_int(_field(d, "ammo", where), f"{where}.ammo", 0)),
-        blast_strength=np.int32(_int(_field(d, "blast_strength", where), f"{where}.blast_strength")),
+        blast_strength=np.int32(
+            _int(_field(d, "blast_strength", where), f"{where}.blast_strength")
+        ),
         can_kick=np.bool_(_bool(_field(d, "can_kick", where), f"{where}.can_kick")),
         alive=alive,
         agent_id=np.int32(agent_id),

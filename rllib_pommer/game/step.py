@@ -226,6 +226,13 @@ def _first_settle(agents, bombs, n_bombs, want, bwant, ao, bo):
                 changed = True
 
 
+@njit(cache=True, inline="always")
+def _push(rows, count, x, y, z):
+    """Append (x, y, z) to a fixed-capacity table holding `count` rows; return the new count."""
+    rows[count, 0], rows[count, 1], rows[count, 2] = x, y, z
+    return count + 1
+
+
 @njit(cache=True)
 def _kick_pass(board, agents, bombs, n_bombs, actions, want, bwant, ao, bo, kicker_of, kicked_by):
     """§3.7: an agent meeting a bomb kicks it if it can and the cell beyond is free.
@@ -252,8 +259,7 @@ def _kick_pass(board, agents, bombs, n_bombs, actions, want, bwant, ao, bo, kick
         bomb_row, bomb_col = bombs[b, B_ROW], bombs[b, B_COL]
         if not _agent_moves(agents, want, a):
             if _bomb_moves(bombs, bwant, b):
-                defer_bomb[n_defer_bomb, 0], defer_bomb[n_defer_bomb, 1], defer_bomb[n_defer_bomb, 2] = b, bomb_row, bomb_col
-                n_defer_bomb += 1
+                n_defer_bomb = _push(defer_bomb, n_defer_bomb, b, bomb_row, bomb_col)
             continue
         kicked = False
         if agents[a, A_KICK] != 0:
@@ -268,17 +274,15 @@ def _kick_pass(board, agents, bombs, n_bombs, actions, want, bwant, ao, bo, kick
                 and not _is_wall(board[tr, tc])
             ):
                 bo[dr, dc] = 0
-                defer_bomb[n_defer_bomb, 0], defer_bomb[n_defer_bomb, 1], defer_bomb[n_defer_bomb, 2] = b, tr, tc
-                n_defer_bomb += 1
+                n_defer_bomb = _push(defer_bomb, n_defer_bomb, b, tr, tc)
                 kicker_of[a] = b
                 kicked_by[b] = a
                 bombs[b, B_DIR] = direction
                 kicked = True
         if not kicked:
-            defer_bomb[n_defer_bomb, 0], defer_bomb[n_defer_bomb, 1], defer_bomb[n_defer_bomb, 2] = b, bomb_row, bomb_col
-            n_defer_bomb += 1
-            defer_agent[n_defer_agent, 0], defer_agent[n_defer_agent, 1], defer_agent[n_defer_agent, 2] = a, agents[a, A_ROW], agents[a, A_COL]
-            n_defer_agent += 1
+            n_defer_bomb = _push(defer_bomb, n_defer_bomb, b, bomb_row, bomb_col)
+            n_defer_agent = _push(defer_agent, n_defer_agent, a, agents[a, A_ROW],
+                                  agents[a, A_COL])
     for k in range(n_defer_bomb):
         b, r, c = defer_bomb[k, 0], defer_bomb[k, 1], defer_bomb[k, 2]
         bwant[b, 0], bwant[b, 1] = r, c

@@ -51,7 +51,7 @@ def first_difference(expected, actual, path: str) -> tuple[str, object, object] 
     if isinstance(expected, list) and isinstance(actual, list):
         if len(expected) != len(actual):
             return f"{path} (length)", len(expected), len(actual)
-        for i, (e, a) in enumerate(zip(expected, actual)):
+        for i, (e, a) in enumerate(zip(expected, actual, strict=True)):
             diff = first_difference(e, a, f"{path}[{i}]")
             if diff:
                 return diff
