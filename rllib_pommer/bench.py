@@ -1,10 +1,17 @@
-"""`python -m rllib_pommer.bench engine [--json]`: our speed beside the reference's figures.
+"""`python -m rllib_pommer.bench engine|agents [--json]`: our speed beside the reference's figures.
 
 `engine` runs protocol (a) of ../shared/reference/README.md §4 on the single-game API and on the
 batched API: 200 Team games per run with precomputed uniform random actions (800 x 4 per game),
 stepped until done; steps/s counts only time inside the step calls (which build all four
-observations), games/s the whole reset + steps. Three runs; min/median/max are printed. Pin the
-process to one core (`taskset -c 0`) to compare per core with the reference.
+observations), games/s the whole reset + steps.
+
+`agents` runs protocol (b): 20 games per run of four SimpleAgents, game g of run r seeded
+2000 + 1000 r + g; steps/s and games/s over the whole loop including reset. It is measured twice:
+with one `SimpleAgent` object per seat deciding per call (the reference's shape), and with the
+batched kernel deciding for all 80 seats of the 20 games in one call per step.
+
+Three runs each; min/median/max are printed. Pin the process to one core (`taskset -c 0`) to
+compare per core with the reference.
 """
 
 from __future__ import annotations
@@ -18,10 +25,13 @@ from pathlib import Path
 
 import numpy as np
 
+from .agents.simple import SimpleAgent, new_memory, simple_actions
 from .game.constants import TEAM
 from .game.engine import Game, Games
+from .game.state import A_ALIVE
 
 GAMES_PER_RUN = 200
+SIMPLE_GAMES_PER_RUN = 20
 RUNS = 3
 REPO_ROOT = Path(__file__).resolve().parents[1]
 REFERENCE_SPEED = REPO_ROOT.parent / "shared" / "reference" / "reference_speed.json"
@@ -68,6 +78,66 @@ def batched_api_run(run: int) -> tuple[float, float]:
     return steps / in_step, GAMES_PER_RUN / total
 
 
+def _simple_seeds(run: int) -> list[int]:
+    return [2000 + 1000 * run + g for g in range(SIMPLE_GAMES_PER_RUN)]
+
+
+def simple_objects_run(run: int) -> tuple[float, float]:
+    """Protocol (b) with one SimpleAgent object per seat and the single-game API."""
+    start = time.perf_counter()
+    steps = 0
+    for seed in _simple_seeds(run):
+        game = Game(TEAM)
+        obs = game.reset(seed)
+        agents = [SimpleAgent() for _ in range(4)]
+        for seat, agent in enumerate(agents):
+            agent.reset(seat, int(TEAM.game_type), np.random.default_rng([seed, seat]))
+        done = False
+        while not done:
+            alive = game.state.agents[0, :, A_ALIVE] != 0
+            actions = [agents[s].act(obs.select(s)) if alive[s] else 0 for s in range(4)]
+            obs, _, done, _ = game.step(actions)
+            steps += 1
+    total = time.perf_counter() - start
+    return steps / total, SIMPLE_GAMES_PER_RUN / total
+
+
+def simple_batched_run(run: int) -> tuple[float, float]:
+    """Protocol (b) with the batched engine and one batched SimpleAgent call per step."""
+    start = time.perf_counter()
+    games = Games(SIMPLE_GAMES_PER_RUN, TEAM)
+    games.reset(_simple_seeds(run))
+    memory = new_memory(4 * SIMPLE_GAMES_PER_RUN, np.random.default_rng(run))
+    steps = 0
+    while not games.done.all():
+        active = games.alive & ~games.done[:, None]
+        actions = simple_actions(games.obs.agent_rows(), memory, active.ravel())
+        steps += int((~games.done).sum())
+        games.step(actions.reshape(-1, 4))
+    total = time.perf_counter() - start
+    return steps / total, SIMPLE_GAMES_PER_RUN / total
+
+
+def bench_agents() -> dict:
+    simple_objects_run(0)
+    simple_batched_run(0)
+    objects = [simple_objects_run(r) for r in range(RUNS)]
+    batched = [simple_batched_run(r) for r in range(RUNS)]
+    reference = json.loads(REFERENCE_SPEED.read_text())["b_simpleagent_games"]
+    ref_games = reference["games_per_s"]["median"]
+    out = {
+        "objects_steps_per_s": _stats([s for s, _ in objects]),
+        "objects_games_per_s": _stats([g for _, g in objects]),
+        "batched_steps_per_s": _stats([s for s, _ in batched]),
+        "batched_games_per_s": _stats([g for _, g in batched]),
+        "reference_steps_per_s": reference["steps_per_s"]["median"],
+        "reference_games_per_s": ref_games,
+    }
+    out["objects_ratio"] = out["objects_games_per_s"]["median"] / ref_games
+    out["batched_ratio"] = out["batched_games_per_s"]["median"] / ref_games
+    return out
+
+
 def _stats(values: list[float]) -> dict:
     return {"min": min(values), "median": statistics.median(values), "max": max(values),
             "runs": values}
@@ -93,33 +163,37 @@ def bench_engine() -> dict:
     return out
 
 
-def _print_engine(result: dict) -> None:
-    title = "protocol (a), Team, 200 games x 3 runs"
+def _print(title: str, result: dict) -> None:
     print(f"{title:44s} {'min':>10s} {'median':>10s} {'max':>10s}")
-    for key in ("single_steps_per_s", "single_games_per_s", "batched_steps_per_s",
-                "batched_games_per_s"):
-        s = result[key]
-        print(f"{key:44s} {s['min']:10.0f} {s['median']:10.0f} {s['max']:10.0f}")
+    for key, s in result.items():
+        if isinstance(s, dict):
+            print(f"{key:44s} {s['min']:10.1f} {s['median']:10.1f} {s['max']:10.1f}")
     print(f"reference steps/s (median) {result['reference_steps_per_s']:.0f}, "
-          f"games/s {result['reference_games_per_s']:.1f}")
-    print(f"ratio single/reference {result['single_ratio']:.1f}x, "
-          f"batched/reference {result['batched_ratio']:.1f}x")
+          f"games/s {result['reference_games_per_s']:.2f}")
+    print(", ".join(f"{k} {v:.1f}x" for k, v in result.items() if k.endswith("_ratio")))
+
+
+TARGETS = {
+    "engine": ("protocol (a): Team, 200 games x 3 runs", bench_engine),
+    "agents": ("protocol (b): 4 SimpleAgents, 20 games x 3 runs", bench_agents),
+}
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m rllib_pommer.bench", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("target", choices=["engine"], help="what to measure")
+    parser.add_argument("target", choices=list(TARGETS), help="what to measure")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     args = parser.parse_args(argv)
     if not REFERENCE_SPEED.exists():
         print(f"error: reference figures not found at {REFERENCE_SPEED}", file=sys.stderr)
         return 2
-    result = bench_engine()
+    title, measure = TARGETS[args.target]
+    result = measure()
     if args.json:
         print(json.dumps(result))
     else:
-        _print_engine(result)
+        _print(title, result)
     return 0
 
 

@@ -50,6 +50,10 @@ class Observation(NamedTuple):
         """The observation(s) at a leading index, e.g. `obs.select(n, agent)` for one agent."""
         return Observation(*(field[index] for field in self))
 
+    def agent_rows(self) -> Observation:
+        """The (N, 4, ...) observations of N games as (N * 4, ...) rows (views, no copy)."""
+        return Observation(*(f.reshape((-1,) + f.shape[2:]) for f in self))
+
 
 def empty_observations(num_games: int, board_size: int = 11) -> Observation:
     """Zeroed observation arrays for the four agents of `num_games` games."""

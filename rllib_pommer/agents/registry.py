@@ -1,0 +1,153 @@
+"""Policies by name: small TOML files in the top-level `policies/` folder, plus filter suffixes.
+
+A policy file holds a `kind` (which factory builds it), a `description`, and any further keys the
+factory needs (e.g. a weights path for learned kinds, registered later with `register_kind`). Data
+files rather than code keep the set of named opponents editable without touching the package.
+
+Names follow the paper's table: `X_jitter`, `X_action` and `X_jitter_action` are policy X under the
+Jitter Correction, the Action Filter, or both. The wrappers are always stacked in the order of
+`FILTERS`, jitter inside and action filter outside: the safety veto must have the last word, also
+over the SimpleAgent moves that jitter correction injects (SimpleAgent walks into blasts too).
+
+The folder is `policies/` next to the package, or the directory named by RLLIB_POMMER_POLICIES.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from .action_filter import ActionFilter
+from .base import Agent
+from .jitter import JitterCorrection
+from .scripted import (
+    RandomAgent,
+    SimpleAgentNoBomb,
+    SmartRandom,
+    StaticAgent,
+    SuicideTeammate,
+)
+from .simple import SimpleAgent
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - exercised only on Python 3.10
+    import tomli as tomllib
+
+POLICIES_ENV_VAR = "RLLIB_POMMER_POLICIES"
+
+# Wrapper name -> wrapper class, innermost first: this order is the stacking order.
+FILTERS: dict[str, Callable[[Agent], Agent]] = {
+    "jitter": JitterCorrection,
+    "action": ActionFilter,
+}
+# Name suffix -> the filters it adds; the longest suffix is tried first.
+FILTER_SUFFIXES = {
+    "_jitter_action": ("jitter", "action"),
+    "_action": ("action",),
+    "_jitter": ("jitter",),
+}
+
+
+@dataclass(frozen=True)
+class PolicySpec:
+    """A resolved policy: its file's contents plus the filters its name asked for."""
+
+    name: str
+    kind: str
+    description: str
+    path: Path
+    params: Mapping[str, Any] = field(default_factory=dict)
+    filters: tuple[str, ...] = ()
+
+
+# Policy kind -> factory building a fresh agent from the spec (`params` carries kind options).
+KINDS: dict[str, Callable[[PolicySpec], Agent]] = {
+    "static": lambda spec: StaticAgent(),
+    "random": lambda spec: RandomAgent(),
+    "simple": lambda spec: SimpleAgent(),
+    "simple_nobomb": lambda spec: SimpleAgentNoBomb(),
+    "smart_random": lambda spec: SmartRandom(),
+    "suicide": lambda spec: SuicideTeammate(),
+}
+
+
+def register_kind(kind: str, factory: Callable[[PolicySpec], Agent]) -> None:
+    """Make policy files with `kind = "<kind>"` buildable (e.g. learned policies)."""
+    KINDS[kind] = factory
+
+
+def policies_dir() -> Path:
+    override = os.environ.get(POLICIES_ENV_VAR)
+    if override:
+        return Path(override)
+    return Path(__file__).resolve().parents[2] / "policies"
+
+
+def policy_names() -> list[str]:
+    """Names of the policy files in `policies_dir()` (without filter suffixes)."""
+    return sorted(path.stem for path in policies_dir().glob("*.toml"))
+
+
+def _load_spec(path: Path, filters: tuple[str, ...]) -> PolicySpec:
+    try:
+        with path.open("rb") as f:
+            data = tomllib.load(f)
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"policy file {path}: invalid TOML ({exc})") from None
+    kind = data.pop("kind", None)
+    if not isinstance(kind, str) or kind not in KINDS:
+        raise ValueError(f"policy file {path}: kind {kind!r} is not one of {sorted(KINDS)}")
+    description = data.pop("description", "")
+    if not isinstance(description, str):
+        raise ValueError(f"policy file {path}: description must be a string")
+    return PolicySpec(path.stem, kind, description, path, data, filters)
+
+
+def _looks_like_path(name_or_path: str | os.PathLike) -> bool:
+    text = os.fspath(name_or_path)
+    return text.endswith(".toml") or os.sep in text or "/" in text
+
+
+def resolve_policy(name_or_path: str | os.PathLike) -> PolicySpec:
+    """The spec of a policy name (optionally with a filter suffix) or of a policy file path."""
+    if _looks_like_path(name_or_path):
+        path = Path(name_or_path)
+        if not path.is_file():
+            raise ValueError(f"policy file {path} does not exist")
+        return _load_spec(path, ())
+    name = str(name_or_path)
+    folder = policies_dir()
+    candidates = [(name, ())] + [
+        (name[: -len(suffix)], filters)
+        for suffix, filters in FILTER_SUFFIXES.items()
+        if name.endswith(suffix)
+    ]
+    for base, filters in candidates:
+        path = folder / f"{base}.toml"
+        if base and path.is_file():
+            return _load_spec(path, filters)
+    raise ValueError(
+        f"unknown policy {name!r}; valid: {policy_names()} (in {folder}), each optionally "
+        f"suffixed with {sorted(FILTER_SUFFIXES)}, or a path to a .toml policy file"
+    )
+
+
+def make_agent(name_or_path: str | os.PathLike, filters: Iterable[str] = ()) -> Agent:
+    """A fresh agent for a policy, wrapped in its name's filters and in `filters`."""
+    if isinstance(filters, str):
+        filters = (filters,)
+    unknown = sorted(set(filters) - set(FILTERS))
+    if unknown:
+        raise ValueError(f"unknown filter(s) {unknown}; valid: {list(FILTERS)}")
+    spec = resolve_policy(name_or_path)
+    wanted = set(spec.filters) | set(filters)
+    agent = KINDS[spec.kind](spec)
+    for filter_name, wrapper in FILTERS.items():
+        if filter_name in wanted:
+            agent = wrapper(agent)
+    return agent

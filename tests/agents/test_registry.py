@@ -1,0 +1,135 @@
+"""Policy names, policy files, filter suffixes and their errors."""
+
+from __future__ import annotations
+
+import pytest
+
+from rllib_pommer.agents import registry
+from rllib_pommer.agents.action_filter import ActionFilter
+from rllib_pommer.agents.base import Agent
+from rllib_pommer.agents.jitter import JitterCorrection
+from rllib_pommer.agents.registry import make_agent, policy_names, resolve_policy
+from rllib_pommer.agents.scripted import SmartRandom, StaticAgent, SuicideTeammate
+from rllib_pommer.agents.simple import SimpleAgent
+
+SHIPPED = ["random", "simple", "simple_nobomb", "smart_random", "static", "suicide"]
+
+
+def layers(agent):
+    """Class names from the outermost wrapper down to the wrapped agent."""
+    names = [type(agent).__name__]
+    while hasattr(agent, "inner"):
+        agent = agent.inner
+        names.append(type(agent).__name__)
+    return names
+
+
+def test_every_shipped_policy_builds_an_agent():
+    assert policy_names() == SHIPPED
+    for name in SHIPPED:
+        spec = resolve_policy(name)
+        assert spec.name == name and spec.kind in registry.KINDS and spec.description
+        assert spec.filters == ()
+        assert isinstance(make_agent(name), Agent)
+
+
+@pytest.mark.parametrize(
+    "name, expected",
+    [
+        ("simple", ["SimpleAgent"]),
+        ("simple_action", ["ActionFilter", "SimpleAgent"]),
+        ("simple_jitter", ["JitterCorrection", "SimpleAgent"]),
+        ("simple_jitter_action", ["ActionFilter", "JitterCorrection", "SimpleAgent"]),
+        ("simple_nobomb_action", ["ActionFilter", "SimpleAgentNoBomb"]),
+        ("static_jitter", ["JitterCorrection", "StaticAgent"]),
+    ],
+)
+def test_suffixes_add_the_wrappers(name, expected):
+    assert layers(make_agent(name)) == expected
+
+
+def test_filters_argument_stacks_jitter_inside_action_once():
+    expected = ["ActionFilter", "JitterCorrection", "SmartRandom"]
+    assert layers(make_agent("smart_random", filters=["action", "jitter"])) == expected
+    assert layers(make_agent("smart_random_action", filters=("jitter", "action"))) == expected
+    assert layers(make_agent("smart_random", filters="action")) == ["ActionFilter", "SmartRandom"]
+
+
+def test_each_call_builds_fresh_agents():
+    first, second = make_agent("simple_jitter_action"), make_agent("simple_jitter_action")
+    assert first is not second and first.inner is not second.inner
+    assert isinstance(first, ActionFilter) and isinstance(first.inner, JitterCorrection)
+    assert isinstance(first.inner.expert, SimpleAgent)
+    assert first.inner.expert is not second.inner.expert
+
+
+def test_unknown_policy_lists_the_valid_names():
+    with pytest.raises(ValueError, match="unknown policy 'simpel'") as info:
+        make_agent("simpel")
+    for name in SHIPPED:
+        assert repr(name) in str(info.value)
+    assert "_jitter_action" in str(info.value)
+    with pytest.raises(ValueError, match="unknown policy"):
+        resolve_policy("simple_action_jitter")
+
+
+def test_unknown_filter_lists_the_valid_ones():
+    with pytest.raises(ValueError, match=r"\['jitter', 'action'\]"):
+        make_agent("simple", filters=["jitter", "actoin"])
+
+
+def test_policy_file_by_path(tmp_path):
+    path = tmp_path / "lazy.toml"
+    path.write_text('kind = "static"\ndescription = "does nothing"\n')
+    spec = resolve_policy(path)
+    assert (spec.name, spec.kind, spec.description, spec.path) == (
+        "lazy",
+        "static",
+        "does nothing",
+        path,
+    )
+    assert isinstance(make_agent(str(path)), StaticAgent)
+    assert layers(make_agent(path, filters=["action"])) == ["ActionFilter", "StaticAgent"]
+    with pytest.raises(ValueError, match="does not exist"):
+        resolve_policy(tmp_path / "missing.toml")
+
+
+def test_bad_policy_files_name_the_problem(tmp_path):
+    unknown = tmp_path / "alien.toml"
+    unknown.write_text('kind = "alien"\n')
+    with pytest.raises(ValueError, match=r"kind 'alien' is not one of \[.*'smart_random'"):
+        resolve_policy(unknown)
+    missing = tmp_path / "blank.toml"
+    missing.write_text('description = "no kind"\n')
+    with pytest.raises(ValueError, match="kind None is not one of"):
+        resolve_policy(missing)
+    broken = tmp_path / "broken.toml"
+    broken.write_text("kind = \n")
+    with pytest.raises(ValueError, match="invalid TOML"):
+        resolve_policy(broken)
+
+
+def test_policies_folder_override(tmp_path, monkeypatch):
+    (tmp_path / "kamikaze.toml").write_text('kind = "suicide"\ndescription = "x"\n')
+    monkeypatch.setenv(registry.POLICIES_ENV_VAR, str(tmp_path))
+    assert policy_names() == ["kamikaze"]
+    assert layers(make_agent("kamikaze_action")) == ["ActionFilter", "SuicideTeammate"]
+    with pytest.raises(ValueError, match=r"valid: \['kamikaze'\]"):
+        make_agent("simple")
+
+
+def test_new_kinds_can_be_registered_with_parameters(tmp_path, monkeypatch):
+    seen = {}
+
+    def build(spec):
+        seen.update(spec.params)
+        return SuicideTeammate() if spec.params["brave"] else SmartRandom()
+
+    monkeypatch.setitem(registry.KINDS, "learned", build)
+    path = tmp_path / "ppo.toml"
+    path.write_text('kind = "learned"\ndescription = "weights"\nbrave = true\nsteps = 3\n')
+    assert isinstance(make_agent(path), SuicideTeammate)
+    assert seen == {"brave": True, "steps": 3}
+    monkeypatch.delitem(registry.KINDS, "learned")
+    registry.register_kind("learned", build)
+    assert registry.KINDS["learned"] is build

@@ -1,0 +1,73 @@
+"""The arena: deterministic by seed, balanced seats, readable records, clear errors."""
+
+from __future__ import annotations
+
+import csv
+import json
+
+import pytest
+
+from rllib_pommer.arena import MatchSpec, play_match, summarise
+from rllib_pommer.evaluate import main
+
+
+def test_same_seed_same_records_whatever_the_workers():
+    spec = MatchSpec("simple", "random", games=6, seed=5)
+    serial = play_match(spec, workers=1)
+    parallel = play_match(spec, workers=2)
+    assert serial == parallel
+    assert play_match(MatchSpec("simple", "random", 6, seed=6), workers=1) != serial
+
+
+def test_seats_alternate_unless_fixed():
+    records = play_match(MatchSpec("static", "static", games=4, seed=1), workers=1)
+    assert [r.seats_a for r in records] == [[0, 2], [1, 3], [0, 2], [1, 3]]
+    fixed = play_match(MatchSpec("static", "static", 2, seed=1, fixed_seats=True), workers=1)
+    assert [r.seats_a for r in fixed] == [[0, 2], [0, 2]]
+    assert all(r.result == "tie" and r.length == 800 for r in records)
+
+
+def test_short_match_statistics_fall_near_the_reference(public_games):
+    reference = json.loads((public_games.parent / "simpleagent_stats.json").read_text())
+    expected = reference["vs_StaticAgent"]
+    spec = MatchSpec("simple", "static", games=120, seed=11, fixed_seats=True)
+    summary = summarise(play_match(spec))
+    # 120 games: compare with a margin of about three standard errors around the reference.
+    assert abs(summary["win"] - expected["teamA_win_rate"]) < 0.08
+    assert abs(summary["mean_length"] - expected["game_length_mean"]) < 35
+    assert abs(summary["bombs_per_agent_a"] - expected["bombs_per_teamA_agent_per_game_mean"]) < 1.2
+    assert summary["bombs_per_agent_b"] == 0
+
+
+def test_cli_prints_summary_and_writes_records(tmp_path, capsys):
+    jsonl, table = tmp_path / "games.jsonl", tmp_path / "games.csv"
+    args = ["--team", "simple", "--vs", "static", "--games", "4", "--seed", "3", "--workers", "1"]
+    assert main([*args, "--records", str(jsonl), "--json"]) == 0
+    out = capsys.readouterr().out
+    summary = json.loads(out.strip().splitlines()[-1])
+    assert summary["games"] == 4
+    assert abs(summary["win"] + summary["loss"] + summary["tie"] - 1) < 1e-9
+    rows = [json.loads(line) for line in jsonl.read_text().splitlines()]
+    assert [r["game"] for r in rows] == [0, 1, 2, 3]
+    assert set(rows[0]) == {"game", "seed", "seats_a", "result", "length", "died",
+                            "own_bomb_deaths", "bombs_laid"}
+    assert main([*args, "--records", str(table)]) == 0
+    with open(table) as f:
+        assert [int(r["length"]) for r in csv.DictReader(f)] == [r["length"] for r in rows]
+
+
+def _exit_code(args) -> int:
+    try:
+        return main(args)
+    except SystemExit as exc:  # argparse rejects bad values itself
+        return exc.code
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--team", "nosuch", "--vs", "simple"], "unknown policy 'nosuch'; valid: "),
+    (["--team", "simple", "--vs", "simple", "--filters", "jitter,magic"], "unknown filter 'magic'"),
+    (["--team", "simple", "--vs", "simple", "--games", "0"], "must be a positive number"),
+])
+def test_bad_arguments_are_named(args, message, capsys):
+    assert _exit_code(args) == 2
+    assert message in capsys.readouterr().err
