@@ -31,3 +31,10 @@ def test_a_tampered_record_is_reported_with_seed_step_and_field(public_games):
     assert (first.seed, first.step) == (record["seed"], step)
     assert first.field.startswith(("state", "observations"))
     assert str(first).startswith(f"game seed {record['seed']} step {step}: ")
+
+
+def test_missing_files_are_named(tmp_path, capsys):
+    assert main(["verify", str(tmp_path / "nope.jsonl.gz")]) == 2
+    assert "nope.jsonl.gz: no such file" in capsys.readouterr().err
+    assert main(["agree", str(tmp_path / "g.jsonl"), "--decisions", str(tmp_path / "d.json")]) == 2
+    assert "d.json" in capsys.readouterr().err
