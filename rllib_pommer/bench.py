@@ -118,58 +118,50 @@ def simple_batched_run(run: int) -> tuple[float, float]:
     return steps / total, SIMPLE_GAMES_PER_RUN / total
 
 
-def bench_agents() -> dict:
-    simple_objects_run(0)
-    simple_batched_run(0)
-    objects = [simple_objects_run(r) for r in range(RUNS)]
-    batched = [simple_batched_run(r) for r in range(RUNS)]
-    reference = json.loads(REFERENCE_SPEED.read_text())["b_simpleagent_games"]
-    ref_games = reference["games_per_s"]["median"]
-    out = {
-        "objects_steps_per_s": _stats([s for s, _ in objects]),
-        "objects_games_per_s": _stats([g for _, g in objects]),
-        "batched_steps_per_s": _stats([s for s, _ in batched]),
-        "batched_games_per_s": _stats([g for _, g in batched]),
-        "reference_steps_per_s": reference["steps_per_s"]["median"],
-        "reference_games_per_s": ref_games,
-    }
-    out["objects_ratio"] = out["objects_games_per_s"]["median"] / ref_games
-    out["batched_ratio"] = out["batched_games_per_s"]["median"] / ref_games
-    return out
-
-
 def _stats(values: list[float]) -> dict:
     return {"min": min(values), "median": statistics.median(values), "max": max(values),
             "runs": values}
 
 
-def bench_engine() -> dict:
-    single_api_run(0)  # compile (or load the compile cache) outside the timed runs
-    batched_api_run(0)
-    single = [single_api_run(r) for r in range(RUNS)]
-    batched = [batched_api_run(r) for r in range(RUNS)]
-    reference = json.loads(REFERENCE_SPEED.read_text())["a_random_env_step"]
-    ref_steps = reference["steps_per_s"]["median"]
-    out = {
-        "single_steps_per_s": _stats([s for s, _ in single]),
-        "single_games_per_s": _stats([g for _, g in single]),
-        "batched_steps_per_s": _stats([s for s, _ in batched]),
-        "batched_games_per_s": _stats([g for _, g in batched]),
-        "reference_steps_per_s": ref_steps,
-        "reference_games_per_s": reference["games_per_s"]["median"],
-    }
-    out["single_ratio"] = out["single_steps_per_s"]["median"] / ref_steps
-    out["batched_ratio"] = out["batched_steps_per_s"]["median"] / ref_steps
+def _measure(variants: dict, section: str, figure: str) -> dict:
+    """Run each variant RUNS times after one warm-up run (compiles or loads the kernel cache).
+
+    The result is flat: `<variant>_steps_per_s` and `<variant>_games_per_s` medians (min, median,
+    max and runs under `..._runs`), the reference's median `reference_<figure>` from `section` of
+    reference_speed.json, and `<variant>_ratio` = our median `figure` over the reference's.
+    """
+    for run in variants.values():
+        run(0)
+    out: dict = {}
+    for name, run in variants.items():
+        results = [run(r) for r in range(RUNS)]
+        for i, unit in enumerate(("steps_per_s", "games_per_s")):
+            stats = _stats([result[i] for result in results])
+            out[f"{name}_{unit}"] = stats["median"]
+            out[f"{name}_{unit}_runs"] = stats
+    reference = json.loads(REFERENCE_SPEED.read_text())[section][figure]["median"]
+    out[f"reference_{figure}"] = reference
+    for name in variants:
+        out[f"{name}_ratio"] = out[f"{name}_{figure}"] / reference
     return out
+
+
+def bench_engine() -> dict:
+    return _measure({"single": single_api_run, "batched": batched_api_run},
+                    "a_random_env_step", "steps_per_s")
+
+
+def bench_agents() -> dict:
+    return _measure({"objects": simple_objects_run, "batched": simple_batched_run},
+                    "b_simpleagent_games", "games_per_s")
 
 
 def _print(title: str, result: dict) -> None:
     print(f"{title:44s} {'min':>10s} {'median':>10s} {'max':>10s}")
     for key, s in result.items():
-        if isinstance(s, dict):
-            print(f"{key:44s} {s['min']:10.1f} {s['median']:10.1f} {s['max']:10.1f}")
-    print(f"reference steps/s (median) {result['reference_steps_per_s']:.0f}, "
-          f"games/s {result['reference_games_per_s']:.2f}")
+        if key.endswith("_runs"):
+            print(f"{key[:-5]:44s} {s['min']:10.1f} {s['median']:10.1f} {s['max']:10.1f}")
+    print(", ".join(f"{k} {v:.1f}" for k, v in result.items() if k.startswith("reference")))
     print(", ".join(f"{k} {v:.1f}x" for k, v in result.items() if k.endswith("_ratio")))
 
 

@@ -145,6 +145,14 @@ def _edge_key(size, r0, c0, r1, c1):
     return min(p, q) * size * size + max(p, q)
 
 
+@njit(cache=True, inline="always")
+def _index_of(keys, n, key):
+    for k in range(n):
+        if keys[k] == key:
+            return k
+    return -1
+
+
 @njit(cache=True)
 def _resolve_crossings(size, agents, bombs, n_bombs, want, bwant):
     """§3.4: agents (then bombs) swapping cells along one edge are sent back.
@@ -162,11 +170,7 @@ def _resolve_crossings(size, agents, bombs, n_bombs, want, bwant):
         if want[a, 0] == r and want[a, 1] == c:
             continue
         key = _edge_key(size, r, c, want[a, 0], want[a, 1])
-        found = -1
-        for k in range(n):
-            if keys[k] == key:
-                found = k
-                break
+        found = _index_of(keys, n, key)
         if found >= 0:
             want[a, 0], want[a, 1] = r, c
             other = owners[found]
@@ -179,11 +183,7 @@ def _resolve_crossings(size, agents, bombs, n_bombs, want, bwant):
         if bwant[b, 0] == r and bwant[b, 1] == c:
             continue
         key = _edge_key(size, r, c, bwant[b, 0], bwant[b, 1])
-        found = -1
-        for k in range(n):
-            if keys[k] == key:
-                found = k
-                break
+        found = _index_of(keys, n, key)
         if found >= 0:
             bwant[b, 0], bwant[b, 1] = r, c
             if not is_agent[found]:
