@@ -16,11 +16,13 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass
 
 import numpy as np
+import torch
 
 from .agents.registry import make_agent
 from .game.blast import mark_blast
 from .game.constants import TEAM, Action
-from .game.engine import Game
+from .game.engine import Games
+from .game.records import GameRecorder
 from .game.state import (
     A_ALIVE,
     A_AMMO,
@@ -33,6 +35,7 @@ from .game.state import (
     B_ROW,
     M_BOMBS,
 )
+from .learned import LearnedAgent, innermost
 
 SEATS_A = ((0, 2), (1, 3))
 
@@ -71,22 +74,12 @@ def seats_of_team_a(spec: MatchSpec, game: int) -> tuple[int, int]:
     return SEATS_A[0] if spec.fixed_seats else SEATS_A[game % 2]
 
 
-class _Players:
-    """The four agents of a worker, built once and reset for every game."""
+CHUNK_GAMES = 16  # games a worker plays in lockstep; fixed, so records never depend on workers
 
-    def __init__(self, spec: MatchSpec):
-        self.spec = spec
-        self.by_team = {
-            seats: [make_agent(spec.team, spec.filters) if s in seats else make_agent(spec.vs)
-                     for s in range(4)]
-            for seats in SEATS_A
-        }
 
-    def for_game(self, game: int, rngs: Sequence[np.random.Generator]) -> list:
-        agents = self.by_team[seats_of_team_a(self.spec, game)]
-        for seat, agent in enumerate(agents):
-            agent.reset(seat, int(TEAM.game_type), rngs[seat])
-        return agents
+def _build_players(spec: MatchSpec, seats_a: tuple[int, int]) -> list:
+    return [make_agent(spec.team, spec.filters) if s in seats_a else make_agent(spec.vs)
+            for s in range(4)]
 
 
 def _exploded_bombs(before: np.ndarray, after: np.ndarray) -> np.ndarray:
@@ -110,68 +103,145 @@ def _killed_by_own_bomb(seat: int, cell: tuple[int, int], board: np.ndarray,
     return False
 
 
-def play_game(spec: MatchSpec, game: int, players: _Players) -> GameRecord:
-    seeds = np.random.SeedSequence([spec.seed, game]).spawn(5)
-    agents = players.for_game(game, [np.random.default_rng(s) for s in seeds[1:]])
-    engine = Game(TEAM)
-    obs = engine.reset(int(seeds[0].generate_state(1)[0]))
+def _prefetch_learned(players: list[list], obs, active: np.ndarray) -> None:
+    """One forward pass per learned policy for all its active agents in the chunk."""
+    groups: dict = {}
+    for g, seats in enumerate(players):
+        for s, agent in enumerate(seats):
+            core = innermost(agent)
+            if active[g, s] and isinstance(core, LearnedAgent):
+                groups.setdefault(id(core.policy), (core.policy, [], []))
+                groups[id(core.policy)][1].append(core)
+                groups[id(core.policy)][2].append((g, s))
+    for policy, agents, rows in groups.values():
+        index = tuple(np.array(rows).T)
+        policy.prefetch(agents, obs.select(*index))
+
+
+class _GameStats:
+    """Per-game counters of one chunk, updated around every step."""
+
+    def __init__(self, n: int):
+        self.bombs_laid = np.zeros((n, 4), np.int64)
+        self.own_bomb_deaths = np.zeros((n, 4), bool)
+        self.length = np.zeros(n, np.int64)
+
+    def before_step(self, state, active: np.ndarray, actions: np.ndarray) -> list:
+        """Count bomb layings (the reference's rule) and keep what death checks need."""
+        kept = []
+        for g in range(active.shape[0]):
+            bombs = state.bombs[g, : state.meta[g, M_BOMBS]].copy()
+            for s in np.flatnonzero(active[g] & (actions[g] == Action.BOMB)):
+                r, c = state.agents[g, s, A_ROW], state.agents[g, s, A_COL]
+                on_bomb = ((bombs[:, B_ROW] == r) & (bombs[:, B_COL] == c)).any()
+                if state.agents[g, s, A_AMMO] > 0 and not on_bomb:
+                    self.bombs_laid[g, s] += 1
+            kept.append((state.board[g].copy(), bombs))
+        return kept
+
+    def after_step(self, state, active: np.ndarray, kept: list) -> None:
+        self.length += active.any(axis=1)
+        died = active & (state.agents[:, :, A_ALIVE] == 0)
+        for g in np.flatnonzero(died.any(axis=1)):
+            board, bombs = kept[g]
+            exploded = _exploded_bombs(bombs, state.bombs[g, : state.meta[g, M_BOMBS]])
+            for s in np.flatnonzero(died[g]):
+                cell = (state.agents[g, s, A_ROW], state.agents[g, s, A_COL])
+                self.own_bomb_deaths[g, s] = _killed_by_own_bomb(s, cell, board, exploded)
+
+
+def _play_chunk(spec: MatchSpec, games: Sequence[int],
+                replay_observations: bool | None = None) -> tuple[list, list]:
+    """Play `games` in lockstep; return their records, and their replays unless
+    `replay_observations` is None (with the per-agent observations if it is True)."""
+    torch_threads_for_workers()
+    n = len(games)
+    seeds = [np.random.SeedSequence([spec.seed, g]).spawn(5) for g in games]
+    engine = Games(n, TEAM)
+    engine.reset([int(s[0].generate_state(1)[0]) for s in seeds])
+    players = []
+    for i, g in enumerate(games):
+        agents = _build_players(spec, seats_of_team_a(spec, g))
+        for seat, agent in enumerate(agents):
+            agent.reset(seat, int(TEAM.game_type), np.random.default_rng(seeds[i][seat + 1]))
+        players.append(agents)
+    recorders = {}
+    if replay_observations is not None:
+        for i, g in enumerate(games):
+            recorders[i] = GameRecorder(engine, i, int(seeds[i][0].generate_state(1)[0]),
+                                        _agent_mix(spec, g), replay_observations)
+            recorders[i].record.update(game=g, match_seed=spec.seed)
+            recorders[i].start()
+    stats = _GameStats(n)
     state = engine.state
-    bombs_laid = [0] * 4
-    own_bomb_deaths = [False] * 4
-    done, info, length = False, {}, 0
-    while not done:
-        alive = state.agents[0, :, A_ALIVE] != 0
-        actions = [agents[s].act(obs.select(s)) if alive[s] else 0 for s in range(4)]
-        board = state.board[0].copy()
-        bombs = state.bombs[0, : state.meta[0, M_BOMBS]].copy()
-        for s in range(4):
-            cell = (state.agents[0, s, A_ROW], state.agents[0, s, A_COL])
-            if (alive[s] and actions[s] == Action.BOMB and state.agents[0, s, A_AMMO] > 0
-                    and not ((bombs[:, B_ROW] == cell[0]) & (bombs[:, B_COL] == cell[1])).any()):
-                bombs_laid[s] += 1
-        obs, _, done, info = engine.step(actions)
-        length += 1
-        died = alive & (state.agents[0, :, A_ALIVE] == 0)
-        if died.any():
-            exploded = _exploded_bombs(bombs, state.bombs[0, : state.meta[0, M_BOMBS]])
-            for s in np.flatnonzero(died):
-                cell = (state.agents[0, s, A_ROW], state.agents[0, s, A_COL])
-                own_bomb_deaths[s] = _killed_by_own_bomb(s, cell, board, exploded)
+    while not engine.done.all():
+        active = engine.alive & ~engine.done[:, None]
+        obs = engine.obs
+        _prefetch_learned(players, obs, active)
+        actions = np.zeros((n, 4), np.int64)
+        for g, s in zip(*np.nonzero(active), strict=True):
+            actions[g, s] = players[g][s].act(obs.select(g, s))
+        was_done = engine.done.copy()
+        kept = stats.before_step(state, active, actions)
+        engine.step(actions)
+        stats.after_step(state, active, kept)
+        for i, recorder in recorders.items():
+            if not was_done[i]:
+                recorder.step(actions[i])
+    records = []
+    for i, g in enumerate(games):
+        seats_a = seats_of_team_a(spec, g)
+        winners = [s for s in range(4) if engine.rewards[i, s] == 1]
+        result = "tie" if not winners else ("win" if seats_a[0] in winners else "loss")
+        records.append(GameRecord(
+            g, spec.seed, list(seats_a), result, int(stats.length[i]),
+            (state.agents[i, :, A_ALIVE] == 0).tolist(), stats.own_bomb_deaths[i].tolist(),
+            stats.bombs_laid[i].tolist()))
+    return records, [recorders[i].finish() for i in sorted(recorders)]
+
+
+def _agent_mix(spec: MatchSpec, game: int) -> str:
     seats_a = seats_of_team_a(spec, game)
-    winners = info.get("winners", [])
-    result = "tie" if not winners else ("win" if seats_a[0] in winners else "loss")
-    return GameRecord(game, spec.seed, list(seats_a), result, length,
-                      [not a for a in (state.agents[0, :, A_ALIVE] != 0)], own_bomb_deaths,
-                      bombs_laid)
+    return " ".join(spec.team if s in seats_a else spec.vs for s in range(4))
 
 
-def _play_chunk(spec: MatchSpec, games: Sequence[int]) -> list[GameRecord]:
-    players = _Players(spec)
-    return [play_game(spec, g, players) for g in games]
+def torch_threads_for_workers() -> None:
+    """One torch thread per process: the workers already fill the cores (rllib-notes §0)."""
+    torch.set_num_threads(1)
 
 
 def play_match(spec: MatchSpec, workers: int | None = None,
                progress: Callable[[int], None] | None = None) -> list[GameRecord]:
-    """All games of the match, in game order, on `workers` processes (default: all cores)."""
-    _Players(spec)  # fail fast on bad names, before any process starts
+    """All games of the match in game order, on `workers` processes (default: all cores)."""
+    _build_players(spec, SEATS_A[0])  # fail fast on bad names, before any process starts
     workers = workers or os.cpu_count() or 1
-    chunk = max(1, min(25, math.ceil(spec.games / (4 * workers))))
-    chunks = [range(i, min(i + chunk, spec.games)) for i in range(0, spec.games, chunk)]
+    chunks = [range(i, min(i + CHUNK_GAMES, spec.games))
+              for i in range(0, spec.games, CHUNK_GAMES)]
     records: list[GameRecord] = []
-    if workers == 1:
+    if workers == 1 or len(chunks) == 1:
         for games in chunks:
-            records += _play_chunk(spec, games)
+            records += _play_chunk(spec, games)[0]
             if progress:
                 progress(len(games))
     else:
-        with ProcessPoolExecutor(workers) as pool:
+        with ProcessPoolExecutor(min(workers, len(chunks))) as pool:
             futures = [pool.submit(_play_chunk, spec, games) for games in chunks]
             for future in as_completed(futures):
-                done = future.result()
+                done = future.result()[0]
                 records += done
                 if progress:
                     progress(len(done))
     return sorted(records, key=lambda r: r.game)
+
+
+def record_games(spec: MatchSpec, count: int, observations: bool = False) -> list[dict]:
+    """Replays (reference JSON Lines schema) of the match's first `count` games, played again
+    in this process; the same seeds make them the games `play_match` played."""
+    replays: list[dict] = []
+    for start in range(0, min(count, spec.games), CHUNK_GAMES):
+        games = range(start, min(start + CHUNK_GAMES, count, spec.games))
+        replays += _play_chunk(spec, games, observations)[1]
+    return replays
 
 
 def wilson(successes: int, n: int, z: float = 1.96) -> tuple[float, float]:

@@ -8,6 +8,9 @@ writes one row per game (.jsonl or .csv) with the columns
     game, seed, seats_a, result (win/loss/tie for A), length, died, own_bomb_deaths, bombs_laid
 
 (the last three by seat 0..3), from which every table can be recomputed. Same seed, same records.
+`--record K` also writes the first K games as replays in the reference's JSON Lines schema
+(`--replays FILE`, with every agent's observations if `--with-observations`), for
+`python -m rllib_pommer.replay render|html|verify`.
 """
 
 from __future__ import annotations
@@ -22,7 +25,8 @@ from pathlib import Path
 from tqdm import tqdm
 
 from .agents.registry import FILTERS
-from .arena import MatchSpec, play_match, record_rows, summarise
+from .arena import MatchSpec, play_match, record_games, record_rows, summarise
+from .game.records import write_games
 
 
 def _filters(text: str) -> tuple[str, ...]:
@@ -81,6 +85,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--fixed-seats", action="store_true", help="team A always on {0, 2}")
     parser.add_argument("--workers", type=int, default=None, help="processes (default: cores)")
     parser.add_argument("--records", type=Path, help="per-game rows, .jsonl or .csv")
+    parser.add_argument("--record", type=int, default=0, metavar="K",
+                        help="write the first K games as replays")
+    parser.add_argument("--replays", type=Path, default=Path("arena_replays.jsonl.gz"),
+                        help="where --record writes (default: %(default)s)")
+    parser.add_argument("--with-observations", action="store_true",
+                        help="replays include every agent's observations")
     parser.add_argument("--json", action="store_true", help="print a final JSON summary")
     args = parser.parse_args(argv)
     try:
@@ -96,6 +106,9 @@ def main(argv: list[str] | None = None) -> int:
     summary["seconds"] = elapsed
     if args.records:
         write_records(args.records, records)
+    if args.record > 0:
+        count = write_games(args.replays, record_games(spec, args.record, args.with_observations))
+        print(f"  wrote {count} replays to {args.replays}")
     print(format_summary(spec, summary))
     print(f"  {len(records) / elapsed:.1f} games/s")
     if args.json:

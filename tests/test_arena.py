@@ -9,6 +9,8 @@ import pytest
 
 from rllib_pommer.arena import MatchSpec, play_match, summarise
 from rllib_pommer.evaluate import main
+from rllib_pommer.game.records import read_games
+from rllib_pommer.replay import main as replay_main
 
 
 def test_same_seed_same_records_whatever_the_workers():
@@ -54,6 +56,22 @@ def test_cli_prints_summary_and_writes_records(tmp_path, capsys):
     assert main([*args, "--records", str(table)]) == 0
     with open(table) as f:
         assert [int(r["length"]) for r in csv.DictReader(f)] == [r["length"] for r in rows]
+
+
+def test_recorded_replays_are_the_played_games_and_verify(tmp_path, capsys):
+    replays = tmp_path / "replays.jsonl.gz"
+    args = ["--team", "simple", "--vs", "random", "--games", "3", "--seed", "4", "--workers", "1",
+            "--record", "2", "--replays", str(replays), "--with-observations", "--records",
+            str(tmp_path / "games.jsonl")]
+    assert main(args) == 0
+    rows = [json.loads(line) for line in (tmp_path / "games.jsonl").read_text().splitlines()]
+    games = list(read_games(replays))
+    assert [g["game"] for g in games] == [0, 1]
+    assert [g["num_steps"] for g in games] == [r["length"] for r in rows[:2]]
+    assert all(g["has_observations"] and "observations" in g["steps"][0] for g in games)
+    capsys.readouterr()
+    assert replay_main(["verify", str(replays)]) == 0
+    assert capsys.readouterr().out.strip().endswith("0 mismatches")
 
 
 def _exit_code(args) -> int:

@@ -155,6 +155,11 @@ class Game:
         return game
 
     @property
+    def batch(self) -> Games:
+        """The underlying batch of one (for tools that work on batches, e.g. recording)."""
+        return self._games
+
+    @property
     def state(self) -> GameState:
         return self._games.state
 

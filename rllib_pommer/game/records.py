@@ -13,9 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .constants import CONFIG_BY_ENV_ID, GameConfig
-from .engine import Game, info_dict
-from .observation import Observation
+from .constants import CONFIG_BY_ENV_ID, NUM_AGENTS, GameConfig, Result
+from .engine import Games, info_dict
 from .serialize import dump_observation
 
 
@@ -57,43 +56,49 @@ def config_of(record: dict) -> GameConfig:
     return CONFIG_BY_ENV_ID[env_id]
 
 
-def _observations(obs: Observation) -> list[dict]:
-    return [dump_observation(obs.select(a)) for a in range(obs.board.shape[0])]
-
-
 class GameRecorder:
-    """Builds one record while a `Game` is played; call `step` after each `Game.step`."""
+    """Builds one record while game `index` of a `Games` batch is played (a `Game` is a batch of
+    one: pass `game.batch`); call `start` after the reset and `step` after each step."""
 
-    def __init__(self, game: Game, seed: int, agent_mix: str = "", with_observations=True):
-        self.game = game
+    def __init__(self, games: Games, index: int, seed: int, agent_mix: str = "",
+                 with_observations: bool = True):
+        self.games = games
+        self.index = index
         self.with_observations = with_observations
         self.record: dict = {
-            "env_id": game.config.env_id,
+            "env_id": games.config.env_id,
             "seed": seed,
             "agent_mix": agent_mix,
-            "initial_state": game.dump(),
+            "initial_state": games.dump(index),
             "has_observations": with_observations,
             "steps": [],
         }
 
-    def start(self, obs: Observation) -> None:
-        if self.with_observations:
-            self.record["initial_observations"] = _observations(obs)
+    def _observations(self) -> list[dict]:
+        obs = self.games.obs
+        return [dump_observation(obs.select(self.index, a)) for a in range(NUM_AGENTS)]
 
-    def step(self, actions, obs: Observation, rewards: np.ndarray, done: bool, info: dict) -> None:
+    def start(self) -> None:
+        if self.with_observations:
+            self.record["initial_observations"] = self._observations()
+
+    def step(self, actions) -> None:
+        n = self.index
+        rewards = self.games.rewards[n]
         entry = {
             "actions": [int(a) for a in actions],
-            "state": self.game.dump(),
+            "state": self.games.dump(n),
             "rewards": [int(r) for r in rewards],
-            "done": bool(done),
-            "info": info,
+            "done": bool(self.games.done[n]),
+            "info": info_dict(int(self.games.results[n]), rewards),
         }
         if self.with_observations:
-            entry["observations"] = _observations(obs)
+            entry["observations"] = self._observations()
         self.record["steps"].append(entry)
 
     def finish(self) -> dict:
         steps = self.record["steps"]
         self.record["num_steps"] = len(steps)
-        self.record["final_info"] = steps[-1]["info"] if steps else info_dict(3, np.zeros(4))
+        self.record["final_info"] = (steps[-1]["info"] if steps
+                                     else info_dict(Result.INCOMPLETE, np.zeros(NUM_AGENTS)))
         return self.record

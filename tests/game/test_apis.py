@@ -52,14 +52,14 @@ def test_recorded_game_exports_and_replays_exactly(tmp_path):
     records = []
     for seed in (11, 12):
         game = Game(TEAM)
-        obs = game.reset(seed)
-        recorder = GameRecorder(game, seed, agent_mix="RRRR")
-        recorder.start(obs)
+        game.reset(seed)
+        recorder = GameRecorder(game.batch, 0, seed, agent_mix="RRRR")
+        recorder.start()
         done = False
         while not done:
             actions = rng.integers(0, 6, 4)
-            obs, rewards, done, info = game.step(actions)
-            recorder.step(actions, obs, rewards, done, info)
+            done = game.step(actions)[2]
+            recorder.step(actions)
         records.append(recorder.finish())
     path = tmp_path / "games.jsonl.gz"
     assert write_games(path, records) == 2

@@ -1,0 +1,112 @@
+"""Learned policies: a `PommerNet` state_dict named by a policy file, played as an Agent.
+
+A policy file of kind "learned" names its weights (`weights = "imitation/pi.pt"`, relative to the
+file) and how to act (`greedy = false` samples from the softmax with the agent's own random
+stream, as PPO's stochastic policy does; `true` takes the most likely action). Weights load with
+`torch.load(weights_only=True)`: plain tensors only, no arbitrary pickle.
+
+Many agents of one policy can share one forward pass: `prefetch` computes the actions of a batch
+of agents from their observations and parks each one on its agent, whose next `act` returns it.
+The arena uses this to batch inference across the games a worker plays in lockstep; wrappers
+(action filter, jitter correction) still call `act` as usual.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from .agents.registry import PolicySpec, register_kind
+from .features import featurize
+from .game.observation import Observation
+from .network import PommerNet
+
+
+def load_policy_net(path: str | Path) -> PommerNet:
+    """A policy network (dropout off, eval mode) from a state_dict file, with a clear error."""
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"{path}: weights file not found")
+    try:
+        state = torch.load(path, map_location="cpu", weights_only=True)
+    except Exception as exc:  # torch raises several types for corrupt or foreign files
+        raise ValueError(f"{path}: not a readable weights file ({exc})") from None
+    net = PommerNet()
+    try:
+        net.load_state_dict(state)
+    except (RuntimeError, TypeError, AttributeError) as exc:
+        raise ValueError(f"{path}: weights do not fit PommerNet ({exc})") from None
+    return net.eval()
+
+
+class LearnedPolicy:
+    """One network shared by every agent of a policy in this process."""
+
+    def __init__(self, net: PommerNet, greedy: bool):
+        self.net = net
+        self.greedy = greedy
+
+    @torch.no_grad()
+    def probabilities(self, obs: Observation) -> np.ndarray:
+        """Action probabilities (B, 6) for observations with leading shape (B,)."""
+        logits = self.net(torch.from_numpy(featurize(obs)))
+        return torch.softmax(logits, dim=-1).numpy().astype(np.float64)
+
+    def choose(self, probs: np.ndarray, rngs: Sequence[np.random.Generator]) -> np.ndarray:
+        if self.greedy:
+            return probs.argmax(axis=-1)
+        # Inverse-CDF sampling, one uniform per agent from its own stream.
+        cdf = probs.cumsum(axis=-1)
+        u = np.array([rng.random() for rng in rngs]) * cdf[:, -1]
+        return np.minimum((cdf < u[:, None]).sum(axis=-1), probs.shape[-1] - 1)
+
+    def prefetch(self, agents: Sequence[LearnedAgent], obs: Observation) -> None:
+        """Decide for `agents` (row i sees `obs.select(i)`) in one forward pass."""
+        actions = self.choose(self.probabilities(obs), [a.rng for a in agents])
+        for agent, action in zip(agents, actions, strict=True):
+            agent.pending = int(action)
+
+
+class LearnedAgent:
+    """The Agent protocol over a shared `LearnedPolicy`."""
+
+    def __init__(self, policy: LearnedPolicy):
+        self.policy = policy
+        self.rng = np.random.default_rng(0)
+        self.pending: int | None = None
+
+    def reset(self, agent_id: int, game_type: int, rng: np.random.Generator) -> None:
+        self.rng = rng
+        self.pending = None
+
+    def act(self, obs: Observation) -> int:
+        if self.pending is None:
+            self.policy.prefetch([self], Observation(*(f[None] for f in obs)))
+        action, self.pending = self.pending, None
+        return action
+
+
+@cache
+def _shared_policy(weights: Path, greedy: bool) -> LearnedPolicy:
+    return LearnedPolicy(load_policy_net(weights), greedy)
+
+
+def _learned_agent(spec: PolicySpec) -> LearnedAgent:
+    if "weights" not in spec.params:
+        raise ValueError(f"{spec.path}: a learned policy needs a 'weights' key")
+    weights = (spec.path.parent / spec.params["weights"]).resolve()
+    return LearnedAgent(_shared_policy(weights, bool(spec.params.get("greedy", False))))
+
+
+def innermost(agent):
+    """The agent at the core of its wrappers (they keep the wrapped agent as `.inner`)."""
+    while hasattr(agent, "inner"):
+        agent = agent.inner
+    return agent
+
+
+register_kind("learned", _learned_agent)
