@@ -170,7 +170,9 @@ def _play_chunk(spec: MatchSpec, games: Sequence[int],
         for i, g in enumerate(games):
             recorders[i] = GameRecorder(engine, i, int(seeds[i][0].generate_state(1)[0]),
                                         _agent_mix(spec, g), replay_observations)
-            recorders[i].record.update(game=g, match_seed=spec.seed)
+            recorders[i].record.update(game=g, match_seed=spec.seed, team=spec.team, vs=spec.vs,
+                                       filters=list(spec.filters),
+                                       seats_a=list(seats_of_team_a(spec, g)))
             recorders[i].start()
     stats = _GameStats(n)
     state = engine.state

@@ -5,6 +5,11 @@
     agree FILE --decisions DECISIONS.json
                      feed each SimpleAgent seat's recorded observations to our SimpleAgent; the
                      last line is `agreement A on N decisions; stable S on K decisions`
+    render FILE [--game K] --out OUT.png|OUT.gif [--step T] [--fog AGENT]
+                     draw game K: one step as a PNG (default the last) or every step as a GIF,
+                     in full or as agent AGENT sees it
+    html FILE [--game K] --out game.html
+                     write a self-contained replay viewer (play/pause, step slider, speed, fog)
 """
 
 from __future__ import annotations
@@ -15,6 +20,9 @@ import sys
 from .agents.agreement import format_line, measure_agreement
 from .game.records import read_games
 from .game.verify import verify_games
+from .viz.frames import load_game
+from .viz.render import render_game
+from .viz.viewer import write_viewer
 
 
 def _verify(args: argparse.Namespace) -> int:
@@ -38,6 +46,18 @@ def _agree(args: argparse.Namespace) -> int:
     return 0
 
 
+def _render(args: argparse.Namespace) -> int:
+    count = render_game(load_game(args.file, args.game), args.out, args.step, args.fog, args.fps)
+    print(f"wrote {args.out} ({count} frame{'s' if count > 1 else ''})")
+    return 0
+
+
+def _html(args: argparse.Namespace) -> int:
+    write_viewer(load_game(args.file, args.game), args.out)
+    print(f"wrote {args.out}")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m rllib_pommer.replay", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -50,6 +70,19 @@ def main(argv: list[str] | None = None) -> int:
     agree.add_argument("file", help="games as .jsonl or .jsonl.gz")
     agree.add_argument("--decisions", required=True, help="the reference decisions .json")
     agree.set_defaults(run=_agree)
+    render = sub.add_parser("render", help="draw a recorded game as a PNG (one step) or a GIF")
+    render.add_argument("file", help="games as .jsonl or .jsonl.gz")
+    render.add_argument("--game", type=int, default=0, help="which game of the file, from 0")
+    render.add_argument("--out", required=True, help="OUT.png or OUT.gif")
+    render.add_argument("--step", type=int, help="the PNG's step, from 0 (default: the last)")
+    render.add_argument("--fog", type=int, metavar="AGENT", help="show what AGENT sees")
+    render.add_argument("--fps", type=float, default=8, help="GIF steps per second")
+    render.set_defaults(run=_render)
+    html = sub.add_parser("html", help="write a self-contained HTML replay viewer")
+    html.add_argument("file", help="games as .jsonl or .jsonl.gz")
+    html.add_argument("--game", type=int, default=0, help="which game of the file, from 0")
+    html.add_argument("--out", required=True, help="the .html file to write")
+    html.set_defaults(run=_html)
     args = parser.parse_args(argv)
     try:
         return args.run(args)

@@ -1,0 +1,136 @@
+"""`python -m rllib_pommer.report RUN_OR_RECORDS... --out DIR`: our runs in the paper's figures
+and tables, as DIR/report.md with PNGs beside it.
+
+Each input is classified by its content:
+
+- a directory: the Tune trial directories in or below it (progress.csv or result.json) give
+  Fig. 3, the training reward per curriculum phase (columns: rllib_pommer/viz/training.py);
+- a .jsonl or .csv file of arena rows (`evaluate --records`; its match is named by a sidecar
+  .json or by its file name, see rllib_pommer/viz/matches.py) gives the win/loss/tie tables in
+  the layout of the paper's Tables 2 and 3 beside the paper's numbers, and Fig. 4, the effect of
+  the filters;
+- a .jsonl[.gz] file of game replays (`evaluate --record K`) gives Fig. 5, the position and bomb
+  heatmaps per opponent, and a picture and a viewer of its first game.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+
+from .game.records import read_games
+from .viz.behaviour import heatmaps_by_opponent
+from .viz.figures import (
+    comparable_opponents,
+    plot_behaviour,
+    plot_filter_effects,
+    plot_training,
+)
+from .viz.frames import load_game
+from .viz.matches import ROW_KEYS, load_outcomes, rates_by_opponent
+from .viz.paper import PAPER_TABLES
+from .viz.render import render_game
+from .viz.tables import results_table
+from .viz.training import find_trials, training_curve
+from .viz.viewer import write_viewer
+
+
+def kind_of(path: Path) -> str:
+    """"trials", "records" (arena rows) or "replays", from what the path holds."""
+    if path.is_dir():
+        if not find_trials(path):
+            raise ValueError(f"{path}: no Tune trial (progress.csv or result.json) in or below it")
+        return "trials"
+    if path.suffix == ".csv":
+        with open(path, newline="") as f:
+            first = dict.fromkeys(next(csv.reader(f), []))
+    else:
+        first = next(read_games(path), {})
+    if "initial_state" in first and "steps" in first:
+        return "replays"
+    if set(first) >= ROW_KEYS:
+        return "records"
+    raise ValueError(f"{path}: neither arena records ({sorted(ROW_KEYS)} ...) nor game replays")
+
+
+def classify(paths: list[Path]) -> dict[str, list[Path]]:
+    found: dict[str, list[Path]] = {"trials": [], "records": [], "replays": []}
+    for path in paths:
+        kind = kind_of(path)
+        found[kind] += find_trials(path) if kind == "trials" else [path]
+    return found
+
+
+def _tables_and_fig4(records: list[Path], out: Path) -> Iterator[str]:
+    outcomes = load_outcomes(records)
+    yield "## Win / loss / tie (the paper's Tables 2 and 3)"
+    yield ("Each cell: team A's win / loss / tie rates; ours over n games, the paper's over 1000 "
+           "games below. Variants add jitter correction and/or the action filter.")
+    for team in sorted({match.team for match in outcomes}):
+        yield results_table(team, outcomes)
+        ours = rates_by_opponent(outcomes, team)
+        if comparable_opponents(ours):
+            name = f"fig4_filters_{team}.png"
+            paper = PAPER_TABLES.get(team, ("", {}))[1]
+            plot_filter_effects(ours, paper, f"Fig. 4: effect of the filters on {team}", out / name)
+            yield f"![Fig. 4 for {team}]({name})"
+
+
+def _fig3(trials: list[Path], out: Path) -> Iterator[str]:
+    plot_training([training_curve(trial) for trial in trials], out / "fig3_training.png")
+    yield "## Training reward (the paper's Fig. 3)"
+    yield f"From {len(trials)} trial(s): " + ", ".join(f"`{t}`" for t in trials)
+    yield "![Fig. 3](fig3_training.png)"
+
+
+def _fig5_and_game(replays: list[Path], out: Path) -> Iterator[str]:
+    maps = heatmaps_by_opponent(record for path in replays for record in read_games(path))
+    plot_behaviour(maps, out / "fig5_behaviour.png")
+    yield "## Positions and bomb placements (the paper's Fig. 5)"
+    yield "![Fig. 5](fig5_behaviour.png)"
+    first = load_game(replays[0])
+    render_game(first, out / "game.png")
+    write_viewer(first, out / "game.html")
+    yield "## A game"
+    yield (f"The last step of the first game of `{replays[0]}`; "
+           "[watch it step by step](game.html) (a self-contained page).")
+    yield "![the last step of a game](game.png)"
+
+
+def write_report(paths: list[Path], out: Path) -> Path:
+    """Classify the inputs, draw what they allow and write `out`/report.md."""
+    found = classify(paths)
+    out.mkdir(parents=True, exist_ok=True)
+    parts = ["# Report: our runs in the paper's figures and tables"]
+    makers = {"records": _tables_and_fig4, "trials": _fig3, "replays": _fig5_and_game}
+    for kind, maker in makers.items():
+        if found[kind]:
+            parts += list(maker(found[kind], out))
+        else:
+            parts.append(f"_No {kind} among the inputs._")
+    report = out / "report.md"
+    report.write_text("\n\n".join(parts) + "\n")
+    return report
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m rllib_pommer.report", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("inputs", nargs="+", type=Path,
+                        help="Tune run directories, arena record files, replay files")
+    parser.add_argument("--out", type=Path, required=True, help="directory for report.md + PNGs")
+    args = parser.parse_args(argv)
+    try:
+        report = write_report(args.inputs, args.out)
+    except (ValueError, OSError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    print(f"wrote {report}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,116 @@
+"""The paper's Figs. 3-5 from our own runs, as PNG files.
+
+Built on `matplotlib.figure.Figure`, which renders with Agg and touches no global pyplot state,
+so figures can be made from any process or thread without a display.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
+
+from .behaviour import Heatmaps
+from .matches import VARIANTS
+from .paper import PAPER_OPPONENTS
+from .training import TrainingCurve, phases
+
+DPI = 120
+# (name, index in a (win, loss, tie) cell, colour), in the order the bars are drawn.
+OUTCOMES = (("win", 0, "#2e9e4f"), ("tie", 2, "#9a9a9a"), ("loss", 1, "#d43434"))
+Rates = dict[str, dict[str, tuple[float, float, float]]]  # opponent -> variant -> cell
+
+
+def plot_training(curves: list[TrainingCurve], out: Path) -> None:
+    """Fig. 3: each run's 1000-episode rolling mean return, one segment per curriculum phase,
+    with the phase names at their starts."""
+    fig = Figure(figsize=(9, 4.8), layout="constrained")
+    ax = fig.add_subplot()
+    for k, curve in enumerate(curves):
+        colour = f"C{k % 10}"
+        for start, end, stage in phases(curve.stages):
+            ax.plot(curve.episodes[start:end], curve.returns[start:end], color=colour,
+                    label=curve.name if start == 0 else None)
+            if stage:
+                ax.axvline(curve.episodes[start], color=colour, linestyle=":", linewidth=1)
+                ax.annotate(stage, (curve.episodes[start], 0.98), rotation=90, ha="right",
+                            va="top", fontsize=8, color=colour,
+                            xycoords=("data", "axes fraction"))
+    ax.set_xlabel("training episodes")
+    ax.set_ylabel("episode return (1000-episode rolling mean)")
+    ax.set_title("Fig. 3: training reward per curriculum phase")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="lower right")
+    fig.savefig(out, dpi=DPI)
+
+
+def _change(cells: dict, variant: str, index: int) -> float:
+    """Percentage-point change of one outcome from vanilla to `variant` (NaN if unknown)."""
+    if cells.get("vanilla") is None or cells.get(variant) is None:
+        return math.nan
+    return 100 * (cells[variant][index] - cells["vanilla"][index])
+
+
+def comparable_opponents(ours: Rates) -> list[str]:
+    """Opponents met by the vanilla team and by at least one filtered variant."""
+    return [vs for vs, cells in ours.items() if "vanilla" in cells and len(cells) > 1]
+
+
+def plot_filter_effects(ours: Rates, paper: Rates, title: str, out: Path) -> None:
+    """Fig. 4: per opponent, the change in win/tie/loss rates when jitter correction, the action
+    filter or both are added; our bars, the paper's changes as black diamonds."""
+    opponents = comparable_opponents(ours)
+    if not opponents:
+        raise ValueError("Fig. 4 needs, for some opponent, a vanilla and a filtered match")
+    columns = min(3, len(opponents))
+    fig = Figure(figsize=(4.2 * columns, 3.4 * math.ceil(len(opponents) / columns) + 0.6),
+                 layout="constrained")
+    axes = fig.subplots(math.ceil(len(opponents) / columns), columns, squeeze=False, sharey=True)
+    filtered = VARIANTS[1:]
+    x = np.arange(len(filtered))
+    width = 0.26
+    for ax, vs in zip(axes.flat, opponents, strict=False):  # spare axes are hidden
+        for k, (_, index, colour) in enumerate(OUTCOMES):
+            offset = x + (k - 1) * width
+            ax.bar(offset, [_change(ours[vs], v, index) for v in filtered], width, color=colour)
+            ax.scatter(offset, [_change(paper.get(vs, {}), v, index) for v in filtered],
+                       marker="D", s=16, color="black", zorder=3)
+        ax.axhline(0, color="black", linewidth=0.8)
+        ax.set_xticks(x, filtered)
+        ax.set_title(f"vs {PAPER_OPPONENTS.get(vs, vs)}", fontsize=10)
+        ax.grid(axis="y", alpha=0.3)
+    for ax in axes.flat[len(opponents):]:
+        ax.set_visible(False)
+    for ax in axes[:, 0]:
+        ax.set_ylabel("change from vanilla (points)")
+    handles = [Patch(color=colour, label=name) for name, _, colour in OUTCOMES]
+    handles.append(Line2D([], [], marker="D", color="black", linestyle="", label="paper"))
+    fig.legend(handles=handles, loc="outside lower center", ncols=len(handles))
+    fig.suptitle(title)
+    fig.savefig(out, dpi=DPI)
+
+
+def plot_behaviour(maps: dict[str, Heatmaps], out: Path) -> None:
+    """Fig. 5: per opponent, where our agents stood and where they laid bombs, as shares of all
+    their steps and bombs, every seat mirrored to start top-left (circled)."""
+    fig = Figure(figsize=(7.4, 3.3 * len(maps) + 0.4), layout="constrained")
+    axes = fig.subplots(len(maps), 2, squeeze=False)
+    for row, (vs, heatmaps) in zip(axes, maps.items(), strict=True):
+        for ax, counts, what in ((row[0], heatmaps.positions, "positions"),
+                                 (row[1], heatmaps.bombs, "bomb placements")):
+            image = ax.imshow(100 * counts / max(counts.sum(), 1), cmap="magma")
+            ax.plot(1, 1, marker="o", markersize=12, markerfacecolor="none",
+                    markeredgecolor="#4fc3f7")
+            ax.set_title(f"vs {PAPER_OPPONENTS.get(vs, vs)}: {what}\n"
+                         f"{heatmaps.games} games, {counts.sum()} in all", fontsize=9)
+            ax.set_xticks(np.arange(-0.5, counts.shape[1]), minor=True)
+            ax.set_yticks(np.arange(-0.5, counts.shape[0]), minor=True)
+            ax.grid(which="minor", color="#444", linewidth=0.5)
+            ax.tick_params(which="both", length=0, labelbottom=False, labelleft=False)
+            fig.colorbar(image, ax=ax, shrink=0.85, label=f"% of {what}")
+    fig.suptitle("Fig. 5: our agents' positions and bomb placements")
+    fig.savefig(out, dpi=DPI)

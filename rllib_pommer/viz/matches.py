@@ -1,0 +1,111 @@
+"""Arena record files (`evaluate --records`, one row per game) and which match each one holds.
+
+The rows do not name the policies, so a file's match comes from, first found:
+
+1. a sidecar `<file without suffix>.json` holding evaluate's `--json` summary line, whose keys
+   `team`, `vs` and `filters` are used (`evaluate ... --records m.jsonl --json | tail -1 > m.json`);
+2. the file name `<team>[+<filter>...]__vs__<opponent>.jsonl` (or `.csv`), e.g.
+   `ppo+jitter+action__vs__simple_nobomb.jsonl`.
+
+A team name may also carry the registry's filter suffixes (`ppo_jitter_action`); they count as
+filters. The variant of a match is its filter set in the paper's column names: `vanilla`,
+`jitter`, `action` or `jitter_action`.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+from collections.abc import Iterable
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..agents.registry import FILTER_SUFFIXES, FILTERS
+
+VARIANTS = ("vanilla", "jitter", "action", "jitter_action")
+NAME_SEPARATOR = "__vs__"
+ROW_KEYS = frozenset({"game", "seats_a", "result"})
+
+
+@dataclass(frozen=True)
+class Match:
+    team: str  # policy name without filters
+    variant: str  # one of VARIANTS
+    vs: str
+
+
+@dataclass
+class Outcomes:
+    """Team A's results over `games` games."""
+
+    win: int = 0
+    loss: int = 0
+    tie: int = 0
+
+    @property
+    def games(self) -> int:
+        return self.win + self.loss + self.tie
+
+    def rates(self) -> tuple[float, float, float]:
+        return self.win / self.games, self.loss / self.games, self.tie / self.games
+
+
+def read_rows(path: Path) -> list[dict]:
+    """Rows of a .jsonl or .csv records file (list columns of a .csv are JSON text)."""
+    with open(path, newline="") as f:
+        if path.suffix == ".csv":
+            return list(csv.DictReader(f))
+        return [json.loads(line) for line in f if line.strip()]
+
+
+def variant_of(team: str, filters: Iterable[str]) -> tuple[str, str]:
+    """(base policy name, variant) of a team name and its extra filters."""
+    wanted = set(filters)
+    for suffix, suffix_filters in FILTER_SUFFIXES.items():  # longest suffix first
+        if team.endswith(suffix):
+            team, wanted = team[: -len(suffix)], wanted | set(suffix_filters)
+            break
+    unknown = wanted - set(FILTERS)
+    if unknown:
+        raise ValueError(f"unknown filter(s) {sorted(unknown)}; valid: {list(FILTERS)}")
+    return team, "_".join(f for f in FILTERS if f in wanted) or "vanilla"
+
+
+def match_of(path: Path) -> Match:
+    sidecar = path.with_suffix(".json")
+    if sidecar.is_file():
+        summary = json.loads(sidecar.read_text().strip().splitlines()[-1])
+        if not {"team", "vs"} <= set(summary):
+            raise ValueError(f"{sidecar}: an evaluate --json summary needs 'team' and 'vs'")
+        team, vs, filters = summary["team"], summary["vs"], summary.get("filters", [])
+    elif NAME_SEPARATOR in path.stem:
+        left, vs = path.stem.split(NAME_SEPARATOR, 1)
+        team, *filters = left.split("+")
+    else:
+        raise ValueError(f"{path}: cannot tell which match it holds; add a sidecar "
+                         f"{sidecar.name} (evaluate --json) or name it "
+                         f"<team>[+<filter>...]{NAME_SEPARATOR}<opponent>{path.suffix}")
+    base, variant = variant_of(team, filters)
+    return Match(base, variant, vs)
+
+
+def load_outcomes(paths: Iterable[Path]) -> dict[Match, Outcomes]:
+    """Team A's results per match, over all the files of each match."""
+    results: dict[Match, Outcomes] = {}
+    for path in paths:
+        outcomes = results.setdefault(match_of(path), Outcomes())
+        for row in read_rows(path):
+            if row["result"] not in ("win", "loss", "tie"):
+                raise ValueError(f"{path}: result {row['result']!r} is not win, loss or tie")
+            setattr(outcomes, row["result"], getattr(outcomes, row["result"]) + 1)
+    return results
+
+
+def rates_by_opponent(results: dict[Match, Outcomes],
+                      team: str) -> dict[str, dict[str, tuple[float, float, float]]]:
+    """Team `team`'s (win, loss, tie) rates by opponent and variant."""
+    table: dict[str, dict[str, tuple[float, float, float]]] = {}
+    for match, outcomes in results.items():
+        if match.team == team and outcomes.games:
+            table.setdefault(match.vs, {})[match.variant] = outcomes.rates()
+    return table

@@ -1,0 +1,64 @@
+"""The paper's Tables 2 and 3 (Meisheri et al. 2019), from ../shared/docs/paper-meisheri-2019.tex.
+
+Each cell is (win, loss, tie) of the row's team in 1000 games, by opponent and by variant; None
+where the paper has "-". One typo is corrected: Table 3, SimpleAgent_NoBomb_action, PPO_action
+reads "016" for the loss rate; 0.16 makes the row sum to 1.
+"""
+
+from __future__ import annotations
+
+from .matches import VARIANTS
+
+Cell = tuple[float, float, float] | None
+
+# Our policy name of each opponent row of the paper.
+PAPER_OPPONENTS = {
+    "static": "StaticAgent",
+    "simple_nobomb": "SimpleAgent_NoBomb",
+    "simple": "SimpleAgent",
+    "simple_nobomb_action": "SimpleAgent_NoBomb_action",
+    "simple_action": "SimpleAgent_action",
+    "ppo_cautious": "PPO_agent_Cautious",
+    "imitation": "Imitation_Vanilla",
+    "skynet": "Skynet",
+}
+
+
+def _row(*cells: Cell) -> dict[str, Cell]:
+    return dict(zip(VARIANTS, cells, strict=True))
+
+
+# Our team policy name -> (table title, {opponent policy name -> variant -> cell}).
+PAPER_TABLES: dict[str, tuple[str, dict[str, dict[str, Cell]]]] = {
+    "imitation": ("Table 2: Imitation team", {
+        "static": _row((0.111, 0.156, 0.733), (0.458, 0.34, 0.201), (0.271, 0.009, 0.72),
+                       (0.824, 0.032, 0.144)),
+        "simple_nobomb": _row((0.355, 0.416, 0.299), (0.379, 0.507, 0.114),
+                              (0.615, 0.109, 0.275), (0.753, 0.115, 0.131)),
+        "simple": _row((0.331, 0.418, 0.251), (0.361, 0.498, 0.141), (0.603, 0.099, 0.297),
+                       (0.756, 0.126, 0.118)),
+        "simple_nobomb_action": _row((0.218, 0.607, 0.175), (0.242, 0.663, 0.095),
+                                     (0.493, 0.176, 0.331), (0.63, 0.227, 0.143)),
+        "simple_action": _row((0.2, 0.618, 0.181), (0.243, 0.665, 0.091), (0.503, 0.167, 0.33),
+                              (0.64, 0.206, 0.154)),
+        "ppo_cautious": _row((0.011, 0.149, 0.84), (0.048, 0.709, 0.242), (0.024, 0.019, 0.957),
+                             (0.268, 0.226, 0.506)),
+    }),
+    "ppo": ("Table 3: PPO team", {
+        "static": _row((0.179, 0.138, 0.681), (0.614, 0.253, 0.132), (0.347, 0.003, 0.65),
+                       (0.904, 0.023, 0.073)),
+        "simple_nobomb": _row((0.373, 0.366, 0.260), (0.425, 0.446, 0.128),
+                              (0.583, 0.081, 0.335), (0.778, 0.111, 0.111)),
+        "simple": _row((0.347, 0.379, 0.273), (0.426, 0.45, 0.123), (0.622, 0.079, 0.298),
+                       (0.778, 0.088, 0.135)),
+        "simple_nobomb_action": _row((0.230, 0.586, 0.183), (0.271, 0.641, 0.086),
+                                     (0.507, 0.16, 0.333), (0.681, 0.19, 0.129)),
+        "simple_action": _row((0.260, 0.537, 0.202), (0.282, 0.615, 0.101),
+                              (0.521, 0.167, 0.312), (0.672, 0.186, 0.142)),
+        "ppo_cautious": _row((0.007, 0.138, 0.855), (0.067, 0.69, 0.239), (0.026, 0.011, 0.963),
+                             (0.313, 0.126, 0.423)),
+        "imitation": _row((0.145, 0.108, 0.747), (0.411, 0.388, 0.201), (0.243, 0.011, 0.746),
+                          (0.713, 0.099, 0.188)),
+        "skynet": _row(None, None, None, (0.451, 0.126, 0.423)),
+    }),
+}

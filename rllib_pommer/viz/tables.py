@@ -1,0 +1,30 @@
+"""Win/loss/tie tables in the paper's layout (Tables 2 and 3): rows are opponents, columns the
+four variants, each cell win / loss / tie; ours over n games, the paper's (1000 games) below."""
+
+from __future__ import annotations
+
+from .matches import VARIANTS, Match, Outcomes
+from .paper import PAPER_OPPONENTS, PAPER_TABLES
+
+
+def _rates(cell) -> str:
+    return " / ".join(f"{x:.3f}" for x in cell)
+
+
+def results_table(team: str, results: dict[Match, Outcomes]) -> str:
+    """The Markdown table of `team` (policy name without filters), beside the paper's if any."""
+    ours = {(m.vs, m.variant): o for m, o in results.items() if m.team == team}
+    title, paper_rows = PAPER_TABLES.get(team, (None, {}))
+    opponents = list(paper_rows) + sorted({vs for vs, _ in ours} - set(paper_rows))
+    heading = f"{title} — ours: `{team}`" if title else f"Team `{team}` (not in the paper)"
+    lines = [f"### {heading}", "",
+             "| opponent | " + " | ".join(VARIANTS) + " |", "|---" * (1 + len(VARIANTS)) + "|"]
+    for vs in opponents:
+        cells = []
+        for variant in VARIANTS:
+            mine = ours.get((vs, variant))
+            text = f"{_rates(mine.rates())} (n={mine.games})" if mine else "—"
+            paper = paper_rows.get(vs, {}).get(variant)
+            cells.append(text + (f"<br>paper {_rates(paper)}" if paper else ""))
+        lines.append(f"| {PAPER_OPPONENTS.get(vs, vs)} (`{vs}`) | " + " | ".join(cells) + " |")
+    return "\n".join(lines)

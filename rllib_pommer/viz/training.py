@@ -1,0 +1,127 @@
+"""Training curves from Tune trial directories, for the paper's Fig. 3.
+
+A trial directory holds `progress.csv` (read first) or `result.json` (one JSON result per line,
+flattened with "/" as Tune does), one row per training iteration. Columns used:
+
+- the mean episode return: the first present of `RETURN_COLUMNS` (required);
+- the episode count: `env_runners/num_episodes_lifetime` (cumulative) or, failing that,
+  `env_runners/num_episodes` (per iteration) (one of them required);
+- the curriculum phase: `curriculum_stage` or `curriculum_kind` (optional; without it the run
+  is one phase).
+
+Rows without a return (empty or NaN: no episode finished yet) are skipped. Each row's mean is
+taken as the mean of the episodes it counts, which turns iterations into a per-episode series; the
+curve is its rolling mean over the last 1000 episodes, restarted at each phase change so a phase's
+curve never mixes opponents.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+RETURN_COLUMNS = ("env_runners/module_episode_returns_mean/learner",
+                  "env_runners/episode_return_mean", "episode_reward_mean")
+LIFETIME_COLUMNS = ("env_runners/num_episodes_lifetime", "num_episodes_lifetime")
+PER_ITERATION_COLUMNS = ("env_runners/num_episodes", "episodes_this_iter")
+STAGE_COLUMNS = ("curriculum_stage", "curriculum_kind")
+TRIAL_FILES = ("progress.csv", "result.json")
+WINDOW = 1000
+
+
+@dataclass
+class TrainingCurve:
+    """One run: per kept row, the lifetime episodes, the rolling mean return and the phase."""
+
+    name: str
+    episodes: np.ndarray
+    returns: np.ndarray
+    stages: list[str]
+
+
+def is_trial(path: Path) -> bool:
+    return path.is_dir() and any((path / name).is_file() for name in TRIAL_FILES)
+
+
+def find_trials(path: Path) -> list[Path]:
+    """`path` if it is a trial directory, else the trial directories below it."""
+    if is_trial(path):
+        return [path]
+    return sorted({p.parent for name in TRIAL_FILES for p in path.rglob(name)})
+
+
+def _flatten(result: dict, prefix: str = "") -> dict:
+    flat = {}
+    for key, value in result.items():
+        if isinstance(value, dict):
+            flat.update(_flatten(value, f"{prefix}{key}/"))
+        else:
+            flat[prefix + key] = value
+    return flat
+
+
+def read_rows(trial: Path) -> list[dict]:
+    if (trial / "progress.csv").is_file():
+        with open(trial / "progress.csv", newline="") as f:
+            return list(csv.DictReader(f))
+    with open(trial / "result.json") as f:
+        return [_flatten(json.loads(line)) for line in f if line.strip()]
+
+
+def _number(value) -> float:
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return math.nan
+
+
+def _column(rows: list[dict], names: tuple[str, ...]) -> str | None:
+    return next((n for n in names if any(n in row for row in rows)), None)
+
+
+def rolling_mean(means: np.ndarray, counts: np.ndarray, window: int = WINDOW) -> np.ndarray:
+    """Per row, the mean return of the last `window` episodes up to it (NaN before any)."""
+    per_episode = np.repeat(means, counts)
+    total = np.concatenate([[0.0], np.cumsum(per_episode)])
+    ends = np.cumsum(counts)
+    starts = np.maximum(ends - window, 0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return (total[ends] - total[starts]) / (ends - starts)
+
+
+def training_curve(trial: Path, window: int = WINDOW) -> TrainingCurve:
+    rows = read_rows(trial)
+    returns_col = _column(rows, RETURN_COLUMNS)
+    lifetime_col = _column(rows, LIFETIME_COLUMNS)
+    per_iter_col = _column(rows, PER_ITERATION_COLUMNS)
+    if returns_col is None or (lifetime_col or per_iter_col) is None:
+        raise ValueError(f"{trial}: needs a return column (one of {list(RETURN_COLUMNS)}) and "
+                         f"an episode count ({LIFETIME_COLUMNS[0]} or {PER_ITERATION_COLUMNS[0]})")
+    stage_col = _column(rows, STAGE_COLUMNS)
+    means = np.array([_number(row.get(returns_col)) for row in rows])
+    if lifetime_col:
+        lifetime = np.nan_to_num(np.array([_number(row.get(lifetime_col)) for row in rows]))
+        counts = np.diff(np.maximum.accumulate(lifetime), prepend=0)
+    else:
+        counts = np.nan_to_num(np.array([_number(row.get(per_iter_col)) for row in rows]))
+    stages = [str(row.get(stage_col, "")) if stage_col else "" for row in rows]
+    known = np.isfinite(means)
+    episodes = np.cumsum(counts)[known]
+    means, counts = means[known], counts[known].astype(np.int64)
+    stages = [s for s, k in zip(stages, known, strict=True) if k]
+    curve = np.full(len(means), np.nan)
+    for start, end, _ in phases(stages):
+        curve[start:end] = rolling_mean(means[start:end], counts[start:end], window)
+    return TrainingCurve(trial.name, episodes, curve, stages)
+
+
+def phases(stages: list[str]) -> list[tuple[int, int, str]]:
+    """(start, end, stage) of each run of equal consecutive stages."""
+    starts = [k for k in range(len(stages)) if k == 0 or stages[k] != stages[k - 1]]
+    ends = starts[1:] + [len(stages)]
+    return [(start, end, stages[start]) for start, end in zip(starts, ends, strict=True)]

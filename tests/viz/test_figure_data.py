@@ -1,0 +1,108 @@
+"""What the figures are drawn from: training curves, match names and results, heatmaps."""
+
+from __future__ import annotations
+
+import json
+import re
+
+import numpy as np
+import pytest
+
+from rllib_pommer.viz.behaviour import heatmaps_by_opponent, to_top_left
+from rllib_pommer.viz.matches import Match, load_outcomes, match_of
+from rllib_pommer.viz.paper import PAPER_OPPONENTS, PAPER_TABLES
+from rllib_pommer.viz.training import rolling_mean, training_curve
+
+from ..conftest import REPO_ROOT
+
+PAPER_TEX = REPO_ROOT.parent / "shared" / "docs" / "paper-meisheri-2019.tex"
+
+
+def test_rolling_mean_weights_rows_by_their_episodes():
+    means, counts = np.array([0.0, 0.0, 1.0]), np.array([500, 500, 500])
+    np.testing.assert_allclose(rolling_mean(means, counts, window=1000), [0, 0, 0.5])
+    np.testing.assert_allclose(rolling_mean(np.array([2.0]), np.array([0])), [np.nan])
+
+
+def test_training_curve_from_progress_csv_restarts_at_each_phase(tmp_path):
+    trial = tmp_path / "PPO_pommer_00000"
+    trial.mkdir()
+    (trial / "progress.csv").write_text(
+        "training_iteration,env_runners/episode_return_mean,env_runners/num_episodes_lifetime,"
+        "curriculum_stage\n"
+        "1,,0,static\n"  # no episode finished yet: skipped
+        "2,-1.0,600,static\n3,0.0,1200,static\n4,1.0,1700,simple\n5,1.0,2200,simple\n")
+    curve = training_curve(trial)
+    np.testing.assert_array_equal(curve.episodes, [600, 1200, 1700, 2200])
+    np.testing.assert_allclose(curve.returns, [-1.0, -0.4, 1.0, 1.0])
+    assert curve.stages == ["static", "static", "simple", "simple"]
+
+
+def test_training_curve_from_nested_result_json_without_stages(tmp_path):
+    rows = [{"env_runners": {"episode_return_mean": r, "num_episodes": 10}} for r in (1, 3)]
+    (tmp_path / "result.json").write_text("".join(json.dumps(r) + "\n" for r in rows))
+    curve = training_curve(tmp_path)
+    np.testing.assert_allclose(curve.returns, [1.0, 2.0])
+    assert curve.stages == ["", ""]
+    (tmp_path / "result.json").write_text(json.dumps({"loss": 1.0}) + "\n")
+    with pytest.raises(ValueError, match="needs a return column"):
+        training_curve(tmp_path)
+
+
+def test_matches_are_named_by_sidecar_or_file_name(tmp_path):
+    rows = [{"game": g, "seats_a": [0, 2], "result": r} for g, r in enumerate(["win", "tie"])]
+    named = tmp_path / "ppo+jitter__vs__simple_action.jsonl"
+    sidecar = tmp_path / "run7.jsonl"
+    for path in (named, sidecar):
+        path.write_text("".join(json.dumps(r) + "\n" for r in rows))
+    (tmp_path / "run7.json").write_text("progress lines\n" + json.dumps(
+        {"team": "ppo_action", "vs": "static", "filters": ["jitter"], "win": 0.5}))
+    assert match_of(named) == Match("ppo", "jitter", "simple_action")
+    assert match_of(sidecar) == Match("ppo", "jitter_action", "static")
+    outcomes = load_outcomes([named, sidecar])
+    assert outcomes[Match("ppo", "jitter", "simple_action")].rates() == (0.5, 0.0, 0.5)
+    anonymous = tmp_path / "games.jsonl"
+    anonymous.write_text("")
+    with pytest.raises(ValueError, match="cannot tell which match"):
+        match_of(anonymous)
+
+
+def test_heatmaps_mirror_every_seat_to_the_top_left():
+    starts = [(1, 1), (9, 1), (9, 9), (1, 9)]
+    assert [to_top_left(p, s) for s, p in enumerate(starts)] == [(1, 1)] * 4
+
+    def state(bombs):
+        agents = [{"agent_id": i, "position": list(p), "is_alive": i != 3}
+                  for i, p in enumerate([(1, 1), (9, 1), (9, 9), (1, 9)])]
+        return {"agents": agents, "bombs": bombs}
+
+    laid = {"position": [9, 2], "bomber_id": 1, "life": 9}
+    older = {"position": [8, 1], "bomber_id": 1, "life": 8}
+    enemy = {"position": [1, 2], "bomber_id": 0, "life": 9}
+    record = {"initial_state": state([]), "steps": [{"state": state([laid, older, enemy])}],
+              "seats_a": [1, 3], "vs": "static"}
+    maps = heatmaps_by_opponent([record] * 3, games_per_opponent=2)["static"]
+    assert maps.games == 2
+    assert maps.positions[1, 1] == 2 * 2  # agent 1 in both states of both games; agent 3 dead
+    assert maps.bombs.sum() == 2 and maps.bombs[1, 2] == 2
+
+
+def test_paper_numbers_are_the_tex_tables():
+    if not PAPER_TEX.exists():
+        pytest.skip(f"{PAPER_TEX} is absent")
+    tex = PAPER_TEX.read_text()
+    our_name = {paper: ours for ours, paper in PAPER_OPPONENTS.items()}
+    for team, label in (("imitation", "tab:results_imitation"), ("ppo", "tab:results_ppo")):
+        end = tex.index(r"\label{" + label)
+        start = tex.rindex(r"\begin{tabular}", 0, end)
+        table = tex[start: tex.index(r"\end{tabular}", start)].replace(r"\_", "_")
+        rows = {}
+        for line in re.split(r"\\midrule|\\\\", table):
+            cells = [c.strip() for c in line.split("&")]
+            if len(cells) == 13 and cells[0] in our_name:
+                values = [None if v == "-" else float("0.16" if v == "016" else v)
+                          for v in cells[1:]]
+                rows[our_name[cells[0]]] = [tuple(values[k: k + 3]) if values[k] is not None
+                                            else None for k in range(0, 12, 3)]
+        expected = {vs: list(cells.values()) for vs, cells in PAPER_TABLES[team][1].items()}
+        assert rows == expected
