@@ -1,7 +1,8 @@
 """Matches between two named policies in Team games: one record per game, and their summary.
 
-Every game draws its board and all agents' random streams from `SeedSequence([seed, game index])`,
-so a match gives the same records whatever the number of worker processes or their scheduling.
+Every game draws its board and all agents' random streams from (seed, game index) by the rule of
+`game/seeding.py`, so a match gives the same records whatever the number of worker processes or
+their scheduling.
 Team A sits on seats {0, 2} in even games and {1, 3} in odd ones (the reference shows a seat
 effect: the SimpleAgent mirror wins 50.6% from {0, 2} against 34.6% from {1, 3}), unless seats are
 fixed.
@@ -23,6 +24,7 @@ from .game.blast import mark_blast
 from .game.constants import TEAM, Action
 from .game.engine import Games
 from .game.records import GameRecorder
+from .game.seeding import game_seeds
 from .game.state import (
     A_ALIVE,
     A_AMMO,
@@ -156,19 +158,19 @@ def _play_chunk(spec: MatchSpec, games: Sequence[int],
     `replay_observations` is None (with the per-agent observations if it is True)."""
     torch_threads_for_workers()
     n = len(games)
-    seeds = [np.random.SeedSequence([spec.seed, g]).spawn(5) for g in games]
+    seeds = [game_seeds(spec.seed, g) for g in games]
     engine = Games(n, TEAM)
-    engine.reset([int(s[0].generate_state(1)[0]) for s in seeds])
+    engine.reset([board_seed for board_seed, _ in seeds])
     players = []
     for i, g in enumerate(games):
         agents = _build_players(spec, seats_of_team_a(spec, g))
         for seat, agent in enumerate(agents):
-            agent.reset(seat, int(TEAM.game_type), np.random.default_rng(seeds[i][seat + 1]))
+            agent.reset(seat, int(TEAM.game_type), seeds[i][1][seat])
         players.append(agents)
     recorders = {}
     if replay_observations is not None:
         for i, g in enumerate(games):
-            recorders[i] = GameRecorder(engine, i, int(seeds[i][0].generate_state(1)[0]),
+            recorders[i] = GameRecorder(engine, i, seeds[i][0],
                                         _agent_mix(spec, g), replay_observations)
             recorders[i].record.update(game=g, match_seed=spec.seed, team=spec.team, vs=spec.vs,
                                        filters=list(spec.filters),

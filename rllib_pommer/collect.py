@@ -1,0 +1,70 @@
+"""`python -m rllib_pommer.collect --games N --out DIR`: the expert dataset for imitation.
+
+Plays N 2v2 Team games of four SimpleAgents (as in Meisheri et al. 2019) on all cores and writes
+every living agent's raw observation and action, one row per (game, step, agent), to Parquet
+shards DIR/shard-NNNNNN.parquet of --shard-games games each (schema: rllib_pommer/data/schema.py;
+read them with rllib_pommer.data.dataset.open_dataset). Same --seed, same dataset, whatever
+--workers. Re-running the same command resumes: finished shards are kept, the rest are played.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from tqdm import tqdm
+
+from .data.collector import SHARD_GAMES, Collection, ShardResult
+
+
+def _positive(text: str) -> int:
+    value = int(text)
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"must be a positive number, got {value}")
+    return value
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m rllib_pommer.collect", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--games", type=_positive, required=True)
+    parser.add_argument("--out", type=Path, required=True, help="dataset directory")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--workers", type=_positive, default=None,
+                        help="processes (default: cores)")
+    parser.add_argument("--shard-games", type=_positive, default=SHARD_GAMES)
+    args = parser.parse_args(argv)
+    try:
+        collection = Collection(args.out, args.games, args.seed, args.shard_games)
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    resumed = sum(r.games for r in collection.results.values())
+    resumed_samples = samples = sum(r.samples for r in collection.results.values())
+    start = time.perf_counter()
+    with tqdm(total=args.games, initial=resumed, unit="game", file=sys.stderr,
+              smoothing=0.1) as bar:
+        bar.set_postfix(samples=samples)
+
+        def progress(result: ShardResult) -> None:
+            nonlocal samples
+            samples += result.samples
+            bar.set_postfix(samples=samples, refresh=False)
+            bar.update(result.games)
+
+        results = collection.run(args.workers, progress)
+    elapsed = time.perf_counter() - start
+    played, new_samples = args.games - resumed, samples - resumed_samples
+    total_bytes = sum(r.bytes for r in results.values())
+    print(f"{args.out}: {len(results)} shards, {args.games} games, {samples} samples, "
+          f"{total_bytes / 2**20:.1f} MiB ({total_bytes / max(samples, 1):.1f} bytes/sample)")
+    print(f"played {played} games in {elapsed:.1f} s: {played / elapsed:.1f} games/s, "
+          f"{new_samples / elapsed:.0f} samples/s"
+          + (f" (resumed after {resumed})" if resumed else ""))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,1 @@
+"""Expert datasets: collecting SimpleAgent games into Parquet shards, and streaming them back."""

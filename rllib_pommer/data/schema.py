@@ -1,0 +1,187 @@
+"""The on-disk form of expert samples: one Parquet row per (game, step, agent) decision.
+
+A row holds the agent's raw observation (the `Observation` fields, not the 19 expanded planes),
+the action it took and the keys that name it. The five 11x11 maps go into one fixed-size binary
+column `maps` (board, bomb_blast_strength, bomb_life, bomb_moving_direction, flame_life, each
+row-major), `position` (2 bytes) and `alive` (4 bytes) into small fixed-size binary columns, and
+the scalars into the narrowest integer types. Rows are sorted by (game, agent_id, step_count), so
+consecutive rows are one agent's consecutive views, which differ in a few cells: zstd then stores a
+sample in about 15 bytes.
+
+Every shard carries two key/value metadata entries: `rllib_pommer.schema_version` (SCHEMA_VERSION)
+and `rllib_pommer.shard`, a JSON object saying what the shard covers (see `ShardMeta`).
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from ..game.observation import Observation, empty_observations
+
+SCHEMA_VERSION = 1
+VERSION_KEY = b"rllib_pommer.schema_version"
+SHARD_KEY = b"rllib_pommer.shard"
+SHARD_GLOB = "shard-*.parquet"
+
+MAP_FIELDS = ("board", "bomb_blast_strength", "bomb_life", "bomb_moving_direction", "flame_life")
+# On-disk types of the other observation fields (every value fits: positions and counts stay far
+# below 256, steps below 65536); the reader widens them back to `empty_observations` dtypes.
+STORED_DTYPES = {
+    "position": np.uint8,
+    "ammo": np.uint8,
+    "blast_strength": np.uint8,
+    "can_kick": np.bool_,
+    "alive": np.bool_,
+    "agent_id": np.uint8,
+    "game_type": np.uint8,
+    "step_count": np.uint16,
+}
+KEY_DTYPES = {"game": np.int32, "board_seed": np.uint32, "action": np.uint8}
+COLUMNS = ("game", "agent_id", "step_count", "action", "board_seed", "maps",
+           *(name for name in STORED_DTYPES if name not in ("agent_id", "step_count")))
+
+ROW_GROUP_ROWS = 16384  # ~18 games; the reader's unit of shuffling and of reading
+WRITE_OPTIONS = {"compression": "zstd", "compression_level": 3, "row_group_size": ROW_GROUP_ROWS,
+                 "write_page_checksum": True}
+
+
+class Samples(NamedTuple):
+    """K recorded decisions: observations with leading shape (K,), and their keys."""
+
+    obs: Observation
+    action: np.ndarray  # (K,) int64
+    game: np.ndarray  # (K,) index of the game in the dataset
+    board_seed: np.ndarray  # (K,) the seed the game's board was generated from
+
+    def take(self, index) -> Samples:
+        return Samples(self.obs.select(index), self.action[index], self.game[index],
+                       self.board_seed[index])
+
+    @staticmethod
+    def concatenate(parts: Sequence[Samples]) -> Samples:
+        obs = Observation(*(np.concatenate(f) for f in zip(*(p.obs for p in parts), strict=True)))
+        keys = (np.concatenate(f) for f in zip(*(p[1:] for p in parts), strict=True))
+        return Samples(obs, *keys)
+
+
+@dataclass(frozen=True)
+class ShardMeta:
+    """What a shard covers: games [first_game, stop_game) of the dataset played from `seed`, in
+    shards of `shard_games` games. (The dataset's total is not recorded: a dataset can grow.)"""
+
+    seed: int
+    first_game: int
+    stop_game: int
+    shard_games: int
+    board_size: int
+    game_type: str = "team"
+    agents: str = "simple"
+
+    def __str__(self) -> str:
+        return (f"{self.agents} {self.game_type} games {self.first_game}..{self.stop_game - 1} "
+                f"of seed {self.seed} in shards of {self.shard_games}")
+
+
+def shard_name(index: int) -> str:
+    return f"shard-{index:06d}.parquet"
+
+
+def _narrow(values: np.ndarray, dtype, name: str) -> np.ndarray:
+    """`values` as `dtype`, refusing to wrap around silently."""
+    if np.dtype(dtype) != np.bool_ and len(values):
+        info = np.iinfo(dtype)
+        if values.min() < info.min or values.max() > info.max:
+            raise ValueError(f"{name}: values {values.min()}..{values.max()} do not fit {dtype}")
+    return np.ascontiguousarray(values, dtype)
+
+
+def _fixed_size(values: np.ndarray) -> pa.FixedSizeBinaryArray:
+    """Each row of `values` (one byte per element) as one fixed-size binary value."""
+    rows = np.ascontiguousarray(values).reshape(len(values), -1)
+    return pa.FixedSizeBinaryArray.from_buffers(pa.binary(rows.shape[1]), len(rows),
+                                                [None, pa.py_buffer(rows)])
+
+
+def _unpack(column: pa.ChunkedArray, shape: tuple[int, ...]) -> np.ndarray:
+    """A fixed-size binary column back into a uint8 array of shape (rows, *shape), no copy."""
+    array = column.chunk(0) if column.num_chunks == 1 else column.combine_chunks()
+    width = int(np.prod(shape))
+    raw = np.frombuffer(array.buffers()[1], np.uint8, len(array) * width, array.offset * width)
+    return raw.reshape((len(array), *shape))
+
+
+def encode(samples: Samples, meta: ShardMeta) -> pa.Table:
+    """The shard table of `samples`, sorted by (game, agent_id, step_count)."""
+    obs = samples.obs
+    order = np.lexsort((obs.step_count, obs.agent_id, samples.game))
+    columns = {name: _narrow(getattr(samples, name)[order], dtype, name)
+               for name, dtype in KEY_DTYPES.items()}
+    maps = np.empty((len(order), len(MAP_FIELDS), *obs.board.shape[1:]), np.uint8)
+    for i, name in enumerate(MAP_FIELDS):  # gathered map by map: 3x faster than select + stack
+        maps[:, i] = getattr(obs, name)[order]
+    columns["maps"] = _fixed_size(maps)
+    for name, dtype in STORED_DTYPES.items():
+        values = _narrow(getattr(obs, name)[order], dtype, name)
+        columns[name] = _fixed_size(values.view(np.uint8)) if values.ndim > 1 else values
+    table = pa.table({name: columns[name] for name in COLUMNS})
+    return table.replace_schema_metadata({VERSION_KEY: str(SCHEMA_VERSION),
+                                          SHARD_KEY: json.dumps(asdict(meta))})
+
+
+def decode_columns(table: pa.Table, board_size: int) -> dict[str, np.ndarray]:
+    """The observation fields (stored dtypes, map fields as views of one (rows, 5, S, S) array)
+    and `action` of a shard table or a slice of one."""
+    template = empty_observations(1, board_size)
+    maps = _unpack(table.column("maps"), (len(MAP_FIELDS), board_size, board_size))
+    columns = {name: maps[:, i] for i, name in enumerate(MAP_FIELDS)}
+    for name in STORED_DTYPES:
+        shape = getattr(template, name).shape[2:]
+        column = table.column(name)
+        columns[name] = _unpack(column, shape) if shape else column.to_numpy()
+    columns["action"] = table.column("action").to_numpy()
+    return columns
+
+
+def to_observation(columns: dict[str, np.ndarray],
+                   index=slice(None)) -> tuple[Observation, np.ndarray]:
+    """Rows `index` of decoded columns: an `Observation` with leading shape (rows,) and the
+    dtypes of `empty_observations` (contiguous copies), and the int64 actions."""
+    template = empty_observations(1, 1)
+    obs = Observation(**{name: np.ascontiguousarray(columns[name][index],
+                                                    getattr(template, name).dtype)
+                         for name in Observation._fields})
+    return obs, columns["action"][index].astype(np.int64)
+
+
+def decode(table: pa.Table, board_size: int) -> tuple[Observation, np.ndarray]:
+    return to_observation(decode_columns(table, board_size))
+
+
+def write_table(table: pa.Table, file) -> None:
+    pq.write_table(table, file, **WRITE_OPTIONS)
+
+
+def read_meta(path: Path) -> tuple[pq.ParquetFile, ShardMeta]:
+    """The open shard and what it covers; ValueError naming the file if it is unreadable, of
+    another schema version or lacks a column."""
+    try:
+        shard = pq.ParquetFile(path, page_checksum_verification=True)
+    except (OSError, pa.ArrowException) as exc:
+        raise ValueError(f"{path}: not a readable Parquet shard ({exc})") from exc
+    metadata = shard.metadata.metadata or {}
+    version = metadata.get(VERSION_KEY, b"none").decode()
+    if version != str(SCHEMA_VERSION):
+        raise ValueError(f"{path}: schema version {version}, this reader expects "
+                         f"{SCHEMA_VERSION}; re-collect it")
+    missing = [name for name in COLUMNS if name not in shard.schema_arrow.names]
+    if missing or SHARD_KEY not in metadata:
+        raise ValueError(f"{path}: malformed shard (missing {missing or SHARD_KEY.decode()})")
+    return shard, ShardMeta(**json.loads(metadata[SHARD_KEY]))

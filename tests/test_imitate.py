@@ -1,0 +1,88 @@
+"""Behaviour cloning on a tiny dataset: it learns, resumes exactly, and its policy plays."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+import torch
+
+from rllib_pommer import bc
+from rllib_pommer.bc import BCConfig, evaluate, train
+from rllib_pommer.data.collector import Collection
+from rllib_pommer.data.dataset import open_dataset
+from rllib_pommer.evaluate import main as evaluate_main
+from rllib_pommer.imitate import write_policy_file
+from rllib_pommer.learned import load_policy_net
+from rllib_pommer.network import PommerNet
+
+
+@pytest.fixture(scope="module")
+def dataset(tmp_path_factory):
+    out = tmp_path_factory.mktemp("expert")
+    Collection(out, 8, 3, 4).run(workers=1)
+    return out
+
+
+def _config(dataset, out, **overrides) -> BCConfig:
+    options = dict(data=dataset, out=out, epochs=1, batch_size=64, lr=3e-3, dropout=0.0,
+                   val_fraction=0.25, threads=1, checkpoint_every=20, max_batches_per_epoch=60,
+                   max_val_batches=None)
+    options.update(overrides)
+    return BCConfig(**options)
+
+
+def test_one_epoch_lowers_the_validation_loss(dataset, tmp_path):
+    cfg = _config(dataset, tmp_path / "policy")
+    _, val = open_dataset(dataset).split(cfg.val_fraction, cfg.seed)
+    torch.manual_seed(cfg.seed)
+    before = evaluate(PommerNet(), val, cfg)
+    metrics = train(cfg)
+    assert metrics["validation_loss"] < before["loss"] - 0.1
+    assert metrics["validation_accuracy"] > before["accuracy"]
+    saved = json.loads((cfg.out / bc.METRICS_FILE).read_text())
+    assert saved["validation_samples"] == metrics["validation_samples"] > 0
+
+
+def test_an_interrupted_run_resumes_to_the_same_weights(dataset, tmp_path, monkeypatch):
+    straight = _config(dataset, tmp_path / "straight", epochs=2)
+    train(straight)
+    resumed = _config(dataset, tmp_path / "resumed", epochs=2)
+    real_save = bc._Checkpoint.save
+
+    def save_then_die(self, net, optimizer, epoch, batch, seconds):
+        real_save(self, net, optimizer, epoch, batch, seconds)
+        if epoch == 1 and batch == 40:
+            raise KeyboardInterrupt  # as if killed right after this checkpoint
+
+    monkeypatch.setattr(bc._Checkpoint, "save", save_then_die)
+    with pytest.raises(KeyboardInterrupt):
+        train(resumed)
+    monkeypatch.setattr(bc._Checkpoint, "save", real_save)
+    train(resumed)
+    a = torch.load(straight.out / bc.WEIGHTS_FILE, weights_only=True)
+    b = torch.load(resumed.out / bc.WEIGHTS_FILE, weights_only=True)
+    assert a.keys() == b.keys() and all(torch.equal(a[k], b[k]) for k in a)
+
+
+def test_the_saved_policy_loads_and_plays_in_the_arena(dataset, tmp_path, capsys):
+    out = tmp_path / "policies" / "tiny"
+    train(_config(dataset, out, max_batches_per_epoch=5))
+    policy = write_policy_file(out, "tiny test policy")
+    assert evaluate_main(["--team", str(policy), "--vs", "static", "--games", "4",
+                          "--workers", "1", "--filters", "action", "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert summary["games"] == 4 and summary["team"] == str(policy)
+
+
+def test_bad_weights_files_are_named(tmp_path):
+    with pytest.raises(ValueError, match="missing.pt: weights file not found"):
+        load_policy_net(tmp_path / "missing.pt")
+    corrupt = tmp_path / "corrupt.pt"
+    corrupt.write_bytes(b"not a torch file")
+    with pytest.raises(ValueError, match="corrupt.pt: not a readable weights file"):
+        load_policy_net(corrupt)
+    wrong = tmp_path / "value_net.pt"
+    torch.save(PommerNet(num_outputs=1).state_dict(), wrong)
+    with pytest.raises(ValueError, match="value_net.pt: weights do not fit PommerNet"):
+        load_policy_net(wrong)
