@@ -1,0 +1,79 @@
+"""Play one of the paper's result tables for a team: every opponent row x filter column.
+
+    python benchmarks/paper_table.py --team imitation --games 1000 --out runs/table2
+    python -m rllib_pommer.report runs/table2/*.jsonl --out runs/table2/report
+
+Each cell is an arena match with seats balanced, written as `<team>[+filters]__vs__<opponent>.jsonl`
+plus the `--json` summary beside it (`.json`), the layout `rllib_pommer.report` reads to print the
+table next to the paper's numbers. Finished cells are skipped, so an interrupted run resumes.
+Opponents default to the paper's Table 2 rows. Not part of CI (about a minute per 1000-game cell).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from rllib_pommer.evaluate import main as evaluate
+
+OPPONENTS = ("static", "simple_nobomb", "simple", "simple_nobomb_action", "simple_action")
+VARIANTS = ((), ("jitter",), ("action",), ("jitter", "action"))
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--team", required=True)
+    parser.add_argument("--games", type=int, default=1000)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--opponents", nargs="+", default=list(OPPONENTS))
+    parser.add_argument("--out", type=Path, required=True)
+    args = parser.parse_args()
+    args.out.mkdir(parents=True, exist_ok=True)
+    team_name = Path(args.team).stem
+    for vs in args.opponents:
+        for filters in VARIANTS:
+            stem = "+".join((team_name, *filters)) + f"__vs__{vs}"
+            records, summary = args.out / f"{stem}.jsonl", args.out / f"{stem}.json"
+            if summary.exists():
+                continue
+            argv = ["--team", args.team, "--vs", vs, "--games", str(args.games), "--seed",
+                    str(args.seed), "--records", str(records), "--json"]
+            if filters:
+                argv += ["--filters", ",".join(filters)]
+            print(f"== {stem}", flush=True)
+            tmp = summary.with_suffix(".json.tmp")
+            stdout = sys.stdout
+            with open(tmp, "w") as f:
+                sys.stdout = _Tee(stdout, f)
+                try:
+                    code = evaluate(argv)
+                finally:
+                    sys.stdout = stdout
+            if code != 0:
+                return code
+            last = tmp.read_text().strip().splitlines()[-1]
+            summary.write_text(json.dumps({**json.loads(last), "team": team_name}) + "\n")
+            tmp.unlink()
+    return 0
+
+
+class _Tee:
+    """Echo the arena's table to the console while keeping its JSON line for the sidecar."""
+
+    def __init__(self, *streams):
+        self.streams = streams
+
+    def write(self, text):
+        for stream in self.streams:
+            stream.write(text)
+
+    def flush(self):
+        for stream in self.streams:
+            stream.flush()
+
+
+if __name__ == "__main__":
+    sys.exit(main())
