@@ -19,6 +19,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import torch
 
+from .agents.http_agent import HttpAgent
 from .agents.registry import make_agent
 from .game.blast import mark_blast
 from .game.constants import TEAM, Action
@@ -214,13 +215,24 @@ def torch_threads_for_workers() -> None:
     torch.set_num_threads(1)
 
 
+def _plays_remote_agents(spec: MatchSpec) -> bool:
+    """A remote (HTTP) agent serves one seat of one game at a time, like a competition container."""
+    return any(isinstance(innermost(agent), HttpAgent)
+               for seats in SEATS_A for agent in _build_players(spec, seats))
+
+
 def play_match(spec: MatchSpec, workers: int | None = None,
                progress: Callable[[int], None] | None = None) -> list[GameRecord]:
-    """All games of the match in game order, on `workers` processes (default: all cores)."""
-    _build_players(spec, SEATS_A[0])  # fail fast on bad names, before any process starts
-    workers = workers or os.cpu_count() or 1
-    chunks = [range(i, min(i + CHUNK_GAMES, spec.games))
-              for i in range(0, spec.games, CHUNK_GAMES)]
+    """All games of the match in game order, on `workers` processes (default: all cores).
+
+    Matches against remote agents are played one game at a time in this process. Seeds are per
+    game, so records do not depend on how games are grouped.
+    """
+    remote = _plays_remote_agents(spec)  # also fails fast on bad names, before any process starts
+    chunk_games = 1 if remote else CHUNK_GAMES
+    workers = 1 if remote else (workers or os.cpu_count() or 1)
+    chunks = [range(i, min(i + chunk_games, spec.games))
+              for i in range(0, spec.games, chunk_games)]
     records: list[GameRecord] = []
     if workers == 1 or len(chunks) == 1:
         for games in chunks:
@@ -242,8 +254,9 @@ def record_games(spec: MatchSpec, count: int, observations: bool = False) -> lis
     """Replays (reference JSON Lines schema) of the match's first `count` games, played again
     in this process; the same seeds make them the games `play_match` played."""
     replays: list[dict] = []
-    for start in range(0, min(count, spec.games), CHUNK_GAMES):
-        games = range(start, min(start + CHUNK_GAMES, count, spec.games))
+    chunk_games = 1 if _plays_remote_agents(spec) else CHUNK_GAMES
+    for start in range(0, min(count, spec.games), chunk_games):
+        games = range(start, min(start + chunk_games, count, spec.games))
         replays += _play_chunk(spec, games, observations)[1]
     return replays
 

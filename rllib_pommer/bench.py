@@ -1,4 +1,4 @@
-"""`python -m rllib_pommer.bench engine|agents [--json]`: our speed beside the reference's figures.
+"""`python -m rllib_pommer.bench engine|agents|train [--json]`: our speed, side by side.
 
 `engine` runs protocol (a) of ../shared/reference/README.md §4 on the single-game API and on the
 batched API: 200 Team games per run with precomputed uniform random actions (800 x 4 per game),
@@ -10,8 +10,11 @@ observations), games/s the whole reset + steps.
 with one `SimpleAgent` object per seat deciding per call (the reference's shape), and with the
 batched kernel deciding for all 80 seats of the 20 games in one call per step.
 
-Three runs each; min/median/max are printed. Pin the process to one core (`taskset -c 0`) to
-compare per core with the reference.
+`train` runs the quick curriculum's PPO config for a few iterations on the real env and on a
+zero-cost env with the same spaces, in one run, and prints env steps/s for both and their ratio.
+
+Three runs each for engine and agents; min/median/max are printed. Pin the process to one core
+(`taskset -c 0`) to compare per core with the reference.
 """
 
 from __future__ import annotations
@@ -157,6 +160,11 @@ def bench_agents() -> dict:
 
 
 def _print(title: str, result: dict) -> None:
+    if not any(key.endswith("_runs") for key in result):
+        print(title)
+        for key, value in result.items():
+            print(f"  {key:40s} {value}")
+        return
     print(f"{title:44s} {'min':>10s} {'median':>10s} {'max':>10s}")
     for key, s in result.items():
         if key.endswith("_runs"):
@@ -165,9 +173,17 @@ def _print(title: str, result: dict) -> None:
     print(", ".join(f"{k} {v:.1f}x" for k, v in result.items() if k.endswith("_ratio")))
 
 
+def bench_train() -> dict:
+    """PPO env steps/s on the real env and on a zero-cost env with the same spaces, one run."""
+    from .rl.bench import bench_train as measure  # Ray and torch only for this target
+
+    return measure()
+
+
 TARGETS = {
     "engine": ("protocol (a): Team, 200 games x 3 runs", bench_engine),
     "agents": ("protocol (b): 4 SimpleAgents, 20 games x 3 runs", bench_agents),
+    "train": ("PPO sampling + learning, real env vs zero-cost env", bench_train),
 }
 
 

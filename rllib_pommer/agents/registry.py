@@ -14,6 +14,7 @@ The folder is `policies/` next to the package, or the directory named by RLLIB_P
 
 from __future__ import annotations
 
+import importlib
 import os
 import sys
 from collections.abc import Callable, Iterable, Mapping
@@ -23,6 +24,7 @@ from typing import Any
 
 from .action_filter import ActionFilter
 from .base import Agent
+from .http_agent import HttpAgent
 from .jitter import JitterCorrection
 from .scripted import (
     RandomAgent,
@@ -73,7 +75,21 @@ KINDS: dict[str, Callable[[PolicySpec], Agent]] = {
     "simple_nobomb": lambda spec: SimpleAgentNoBomb(),
     "smart_random": lambda spec: SmartRandom(),
     "suicide": lambda spec: SuicideTeammate(),
+    "http": HttpAgent.from_spec,
 }
+
+
+# Kinds whose factories live above this layer (torch side), imported when first named, like
+# entry points: this layer names the module but never imports it at import time.
+PLUGIN_KINDS = {
+    "learned": "rllib_pommer.learned",
+    "rllib_checkpoint": "rllib_pommer.rl.checkpoint_policy",
+}
+
+
+def _ensure_kind(kind: str) -> None:
+    if isinstance(kind, str) and kind in PLUGIN_KINDS and kind not in KINDS:
+        importlib.import_module(PLUGIN_KINDS[kind])
 
 
 def register_kind(kind: str, factory: Callable[[PolicySpec], Agent]) -> None:
@@ -100,6 +116,7 @@ def _load_spec(path: Path, filters: tuple[str, ...]) -> PolicySpec:
     except tomllib.TOMLDecodeError as exc:
         raise ValueError(f"policy file {path}: invalid TOML ({exc})") from None
     kind = data.pop("kind", None)
+    _ensure_kind(kind)
     if not isinstance(kind, str) or kind not in KINDS:
         raise ValueError(f"policy file {path}: kind {kind!r} is not one of {sorted(KINDS)}")
     description = data.pop("description", "")
@@ -117,6 +134,10 @@ def resolve_policy(name_or_path: str | os.PathLike) -> PolicySpec:
     """The spec of a policy name (optionally with a filter suffix) or of a policy file path."""
     if _looks_like_path(name_or_path):
         path = Path(name_or_path)
+        if path.is_dir():  # a PPO run, trial or checkpoint folder: play its learner
+            _ensure_kind("rllib_checkpoint")
+            return PolicySpec(path.name, "rllib_checkpoint", f"learner of {path}", path,
+                              {"checkpoint": str(path.resolve())})
         if not path.is_file():
             raise ValueError(f"policy file {path} does not exist")
         return _load_spec(path, ())

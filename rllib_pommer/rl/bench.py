@@ -1,0 +1,94 @@
+"""How much the real game costs PPO: the same config on the real env and on a zero-cost twin.
+
+`bench_train(iterations)` builds the PPO config of a curriculum (default "quick", first stage:
+all four agents exposed, SimpleAgent opponents as stateful fixed modules, the learner's filters)
+twice, once on the real env and once on `ZeroCostEnv`, which has the same spaces, agents and
+infos but replays one precomputed observation and ends episodes after the real run's mean episode
+length. Everything else (module inference, connectors, fixed modules, learner updates) is
+identical, so the ratio of env steps/s says how much of the budget the game and featurizer take
+(goal: >= 0.85). Pi starts from random weights; speed does not depend on them.
+"""
+
+from __future__ import annotations
+
+import tempfile
+import time
+from pathlib import Path
+
+import ray
+import torch
+from ray.tune.registry import register_env
+
+from ..network import PommerNet
+from .config import build_config
+from .curriculum import load_curriculum
+from .env import ENV_NAME, PommeEnv
+
+ZERO_COST_ENV = "pommerman_team_zero_cost"
+
+
+class ZeroCostEnv(PommeEnv):
+    """env_config["episode_length"]: steps per episode; no deaths, rewards 0, a tie at the end."""
+
+    def __init__(self, config: dict | None = None):
+        super().__init__(config)
+        self._length = int((config or {}).get("episode_length", 100))
+        self._obs, self._infos = super().reset(seed=0)
+        self._t = 0
+
+    def reset(self, *, seed=None, options=None):
+        self._t = 0
+        self.agents = list(self.possible_agents)
+        return self._obs, self._infos
+
+    def step(self, action_dict):
+        self._t += 1
+        done = self._t >= self._length
+        infos = {a: {**self._infos[a], **({"winners": []} if done else {})} for a in action_dict}
+        return ({a: self._obs[a] for a in action_dict}, dict.fromkeys(action_dict, 0.0),
+                {**dict.fromkeys(action_dict, done), "__all__": done}, {"__all__": False}, infos)
+
+
+register_env(ZERO_COST_ENV, ZeroCostEnv)
+
+
+def _steps_per_second(config, iterations: int) -> tuple[float, float]:
+    """(env steps/s over `iterations` timed iterations after one warm-up, mean episode length)."""
+    algo = config.build_algo()
+    try:
+        algo.train()
+        steps, lengths, start = 0.0, [], time.perf_counter()
+        for _ in range(iterations):
+            runners = algo.train()["env_runners"]
+            steps += runners["num_env_steps_sampled"]
+            lengths.append(float(runners.get("episode_len_mean", 0.0)))
+        return float(steps) / (time.perf_counter() - start), sum(lengths) / len(lengths)
+    finally:
+        algo.stop()
+
+
+def bench_train(iterations: int = 3, curriculum: str = "quick") -> dict:
+    """Env steps/s of PPO on the real and the zero-cost env, and their ratio."""
+    torch.set_num_threads(1)
+    torch.set_flush_denormal(True)
+    started_ray = not ray.is_initialized()
+    if started_ray:
+        ray.init(num_cpus=2, include_dashboard=False)
+    try:
+        with tempfile.TemporaryDirectory() as tmp:
+            weights = Path(tmp) / "pi.pt"
+            torch.save(PommerNet().state_dict(), weights)
+            plan = load_curriculum(curriculum)
+            real, episode_length = _steps_per_second(
+                build_config(plan, pi_weights=weights, env=ENV_NAME), iterations)
+            zero_config = build_config(plan, pi_weights=weights, env=ZERO_COST_ENV)
+            zero_config.environment(env_config={**zero_config.env_config,
+                                                "episode_length": max(int(episode_length), 1)})
+            zero, _ = _steps_per_second(zero_config, iterations)
+    finally:
+        if started_ray:
+            ray.shutdown()
+    return {"curriculum": curriculum, "iterations": iterations,
+            "mean_episode_length": round(float(episode_length), 1),
+            "real_env_steps_per_s": round(real, 1), "zero_cost_env_steps_per_s": round(zero, 1),
+            "ratio": round(real / zero, 3)}

@@ -1,0 +1,106 @@
+"""The curriculum in force, and the metrics that say how the learner really does.
+
+The stage is a function of one number, the lifetime episode count over all env runners
+(`env_runners/num_episodes_lifetime`), which RLlib checkpoints. So after every iteration, after a
+checkpoint is loaded and when the algorithm is built, the callback recomputes the stage and pushes
+all of it again (idempotent and cheap, rllib-notes K2): the policy mapping on every env runner and
+in `algorithm.config` (so checkpoints carry it), reward mode and filter probabilities on every env,
+and pi's freeze on every learner (requires_grad is not checkpointed). A restarted env runner or a
+restored run therefore picks up the right stage by itself.
+
+Per episode the learner's true outcome (win/loss/tie of its team), its return under the stage's
+reward mode and the share of its actions the filters overrode are logged; they appear under
+`env_runners/` in the results.
+"""
+
+from __future__ import annotations
+
+from ray.rllib.callbacks.callbacks import RLlibCallback
+from ray.rllib.utils.metrics import ENV_RUNNER_RESULTS, NUM_EPISODES_LIFETIME
+
+from .connectors import FILTERS_KEY
+from .curriculum import Curriculum
+from .mapping import SeatMapping
+from .rl_module import LEARNER
+
+
+def _push_stage(env_runner, mapping: SeatMapping, env_settings: dict) -> None:
+    mapping_fn = env_runner.config.policy_mapping_fn
+    if getattr(mapping_fn, "stage", None) != mapping.stage:
+        env_runner.config.multi_agent(policy_mapping_fn=mapping)
+    if env_runner.env is not None:  # the driver's runner has no env when remote runners exist
+        for env in env_runner.env.unwrapped.envs:
+            env.unwrapped.set_stage(**env_settings)
+
+
+def _learner_outcome(chunks) -> tuple[str, float] | None:
+    """("win"|"loss"|"tie", the learner's return) from an episode's chunks, or None.
+
+    An agent that died in an earlier chunk is absent from the later ones, so all are searched."""
+    learner_steps = [e for chunk in chunks for e in chunk.agent_episodes.values()
+                     if e.module_id == LEARNER]
+    finals = [e.get_infos(-1) for e in chunks[-1].agent_episodes.values()]
+    winners = next((info["winners"] for info in finals if "winners" in info), None)
+    if not learner_steps or winners is None:
+        return None
+    seat = learner_steps[0].agent_id
+    result = "tie" if not winners else "win" if seat in winners else "loss"
+    return result, sum(e.get_return() for e in learner_steps)
+
+
+class CurriculumCallback(RLlibCallback):
+    def __init__(self, curriculum: Curriculum):
+        super().__init__()
+        self.curriculum = curriculum
+
+    def apply_stage(self, algorithm, episodes: int) -> int:
+        index = self.curriculum.stage_at(episodes)
+        stage = self.curriculum.stages[index]
+        mapping = SeatMapping(index, stage.teammate, stage.opponent)
+        env_settings = {"reward": stage.reward, "action_filter": stage.action_filter,
+                        "jitter": stage.jitter}
+        algorithm.env_runner_group.foreach_env_runner(
+            lambda runner: _push_stage(runner, mapping, env_settings), local_env_runner=True)
+        if getattr(algorithm.config.policy_mapping_fn, "stage", None) != index:
+            algorithm.config._is_frozen = False
+            algorithm.config.multi_agent(policy_mapping_fn=mapping)
+            algorithm.config.freeze()
+        algorithm.learner_group.foreach_learner(
+            lambda learner: learner.module[LEARNER].set_pi_frozen(stage.freeze_pi))
+        return index
+
+    def _lifetime_episodes(self, algorithm) -> int:
+        return int(algorithm.metrics.peek((ENV_RUNNER_RESULTS, NUM_EPISODES_LIFETIME), default=0))
+
+    def on_algorithm_init(self, *, algorithm, **kwargs) -> None:
+        self.apply_stage(algorithm, self._lifetime_episodes(algorithm))
+
+    def on_checkpoint_loaded(self, *, algorithm, **kwargs) -> None:
+        self.apply_stage(algorithm, self._lifetime_episodes(algorithm))
+
+    def on_train_result(self, *, algorithm, result, **kwargs) -> None:
+        episodes = int(result[ENV_RUNNER_RESULTS].get(NUM_EPISODES_LIFETIME, 0))
+        index = self.apply_stage(algorithm, episodes)
+        result["curriculum"] = {
+            "stage": index,
+            "stage_name": self.curriculum.stages[index].name,
+            "episodes": episodes,
+            "total_episodes": self.curriculum.total_episodes,
+            "pi_frozen": self.curriculum.stages[index].freeze_pi,
+        }
+
+    def on_episode_end(self, *, episode, prev_episode_chunks=None, metrics_logger=None,
+                       **kwargs) -> None:
+        outcome = _learner_outcome([*(prev_episode_chunks or []), episode])
+        if outcome is None or metrics_logger is None:
+            return
+        result, learner_return = outcome
+        for name in ("win", "loss", "tie"):
+            metrics_logger.log_value(f"learner_{name}", float(result == name), window=100)
+        metrics_logger.log_value("learner_return", learner_return, window=100)
+        filters = episode.custom_data.get(FILTERS_KEY)
+        if filters is not None and filters.steps:
+            metrics_logger.log_value("learner_override_share",
+                                     filters.overridden / filters.steps, window=100)
+            for name, on in filters.flags.items():
+                metrics_logger.log_value(f"learner_{name}_on", float(on), window=100)

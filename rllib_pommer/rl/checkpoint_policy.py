@@ -1,0 +1,70 @@
+"""Policy kind "rllib_checkpoint": the learner module of a PPO run, played like any learned policy.
+
+A policy file (`kind = "rllib_checkpoint"`, `checkpoint = "<path>"` relative to the file, optional
+`greedy`) or a bare directory given as a policy name (see `registry.resolve_policy`) names a
+checkpoint folder, a Tune trial folder (its latest `checkpoint_*` is used) or a run folder holding
+one or more trials (the newest checkpoint among them). The learner's pi weights are read straight
+from the module's saved state, without rebuilding the RLlib module (which would want the imitation
+weights it started from), into a `PommerNet`, and played by `learned.LearnedPolicy`.
+"""
+
+from __future__ import annotations
+
+import pickle
+from functools import cache
+from pathlib import Path
+
+import torch
+
+from ..agents.registry import PolicySpec, register_kind
+from ..learned import LearnedAgent, LearnedPolicy
+from ..network import PommerNet
+
+MODULE_STATE = Path("learner_group/learner/rl_module/learner/module_state.pkl")
+
+
+def latest_checkpoint(path: str | Path) -> Path:
+    """The checkpoint folder `path` names: itself, or its newest `checkpoint_*` (one or two
+    levels down, for a trial or a run folder)."""
+    path = Path(path)
+    if (path / MODULE_STATE).is_file():
+        return path
+    found = [p for p in (*path.glob("checkpoint_*"), *path.glob("*/checkpoint_*"))
+             if (p / MODULE_STATE).is_file()]
+    if not found:
+        raise ValueError(f"{path}: no RLlib checkpoint with a learner module (looked for "
+                         f"{MODULE_STATE} in it and in its checkpoint_* folders)")
+    return max(found, key=lambda p: (p.stat().st_mtime, p.name))
+
+
+def load_checkpoint_net(path: str | Path) -> PommerNet:
+    """The learner's policy network (eval mode) from a checkpoint, trial or run folder."""
+    state_file = latest_checkpoint(path) / MODULE_STATE
+    with state_file.open("rb") as f:
+        state = pickle.load(f)
+    pi = {key.removeprefix("pi."): torch.as_tensor(value) for key, value in state.items()
+          if key.startswith("pi.")}
+    net = PommerNet()
+    try:
+        net.load_state_dict(pi)
+    except RuntimeError as exc:
+        raise ValueError(f"{state_file}: learner weights do not fit PommerNet ({exc})") from None
+    return net.eval()
+
+
+@cache
+def _shared_policy(path: Path, greedy: bool) -> LearnedPolicy:
+    return LearnedPolicy(load_checkpoint_net(path), greedy)
+
+
+def checkpoint_path(spec: PolicySpec) -> Path:
+    if "checkpoint" not in spec.params:
+        raise ValueError(f"{spec.path}: an rllib_checkpoint policy needs a 'checkpoint' key")
+    return (spec.path.parent / spec.params["checkpoint"]).resolve()
+
+
+def _checkpoint_agent(spec: PolicySpec) -> LearnedAgent:
+    return LearnedAgent(_shared_policy(checkpoint_path(spec), bool(spec.params.get("greedy"))))
+
+
+register_kind("rllib_checkpoint", _checkpoint_agent)

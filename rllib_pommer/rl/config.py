@@ -1,0 +1,75 @@
+"""The PPOConfig of a curriculum: env, modules, mapping, connectors, callback and PPO settings.
+
+Paper settings (fixed): entropy coefficient 0, clip 0.01, minibatch 128, no dropout.
+Others (our choices, overridable in a curriculum's [ppo] table, defaults in
+`curriculum.PPO_OPTIONS`): lr 1e-4 (small, to stay near the imitation policy), gamma 0.99,
+GAE lambda 0.95, 4 epochs over batches of 4,000 env steps (~3,500 learner rows; all four agents
+step, and the learner's rows are the ones trained), value loss coefficient 1 with RLlib's default
+value clip 10 (returns are within [-1, 1]), no KL penalty (the clip does the work), gradient norm
+clip 10, 8 envs per env runner (batched inference, rllib-notes I), and 0 remote env runners on a
+2-core machine (more help only on a bigger cluster: `num_env_runners`).
+"""
+
+from __future__ import annotations
+
+from functools import partial
+from pathlib import Path
+
+from ray.rllib.algorithms.ppo import PPOConfig
+from ray.rllib.core.rl_module.multi_rl_module import MultiRLModuleSpec
+from ray.rllib.core.rl_module.rl_module import RLModuleSpec
+
+from .callbacks import CurriculumCallback
+from .connectors import LearnerFilters
+from .curriculum import Curriculum
+from .env import ENV_NAME
+from .fixed_modules import fixed_module_spec
+from .mapping import SeatMapping
+from .rl_module import LEARNER, PommerPPOModule
+
+
+def _learner_filters(env=None, spaces=None, device=None):
+    return [LearnerFilters()]
+
+
+def check_pi_weights(path: Path) -> Path:
+    if not Path(path).is_file():
+        raise ValueError(
+            f"imitation weights not found: {path} (train them with `python -m "
+            f"rllib_pommer.imitate`, set pi_weights in the curriculum file, or pass --pi-weights)")
+    return Path(path).resolve()
+
+
+def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None,
+                 num_env_runners: int = 0, seed: int = 0, env: str = ENV_NAME) -> PPOConfig:
+    """PPO for `curriculum`; `pi_weights` overrides the file's; `env` may name another env with
+    the same spaces (the bench's zero-cost twin)."""
+    weights = check_pi_weights(Path(pi_weights) if pi_weights else curriculum.pi_weights)
+    first = curriculum.stages[0]
+    ppo = curriculum.ppo
+    modules = {LEARNER: RLModuleSpec(module_class=PommerPPOModule,
+                                     model_config={"pi_weights": str(weights)})}
+    modules |= {name: fixed_module_spec(name) for name in curriculum.policies()}
+    return (
+        PPOConfig()
+        .environment(env, env_config={
+            "max_steps": curriculum.max_steps, "reward": first.reward,
+            "action_filter": first.action_filter, "jitter": first.jitter})
+        .env_runners(
+            num_env_runners=num_env_runners,
+            num_envs_per_env_runner=ppo["num_envs_per_env_runner"],
+            module_to_env_connector=_learner_filters,
+            rollout_fragment_length="auto")
+        .multi_agent(
+            policies=set(modules),
+            policy_mapping_fn=SeatMapping(0, first.teammate, first.opponent),
+            policies_to_train=[LEARNER])
+        .rl_module(rl_module_spec=MultiRLModuleSpec(rl_module_specs=modules))
+        .training(
+            entropy_coeff=0.0, clip_param=0.01, minibatch_size=128,
+            lr=ppo["lr"], gamma=ppo["gamma"], lambda_=ppo["lambda"],
+            num_epochs=ppo["num_epochs"], train_batch_size_per_learner=ppo["train_batch_size"],
+            vf_loss_coeff=ppo["vf_loss_coeff"], use_kl_loss=False, grad_clip=10.0)
+        .callbacks(partial(CurriculumCallback, curriculum))
+        .debugging(seed=seed)
+    )

@@ -1,0 +1,98 @@
+"""The learner's action filter and jitter correction as a module-to-env connector piece.
+
+The paper post-processes the policy's actions: the Action Filter (vetoes moves into flames) in some
+episodes and the Jitter Correction (SimpleAgent takes over when the agent loops) in others. Doing
+it here rather than in the env means the executed action is the one stored in the episode: the
+piece overwrites the ACTIONS column and recomputes ACTION_LOGP from the module's logits, so PPO
+trains on what was executed with a consistent probability ratio (rllib-notes §E).
+
+Which filters are on is decided per episode by the env's seeded stream (the `filters` info) and
+read once into `episode.custom_data`, together with the wrappers that apply them: the agents'
+own `JitterCorrection` and `ActionFilter` (stacked jitter inside, filter outside, as in the
+registry) around a stand-in that returns the module's action. Their memory (positions, the
+expert SimpleAgent's memory, random streams) therefore lives with the episode, seeded from the
+episode's first observation. Counts of learner steps and overridden actions go to custom_data for
+the episode-end metrics.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from ray.rllib.connectors.connector_v2 import ConnectorV2
+from ray.rllib.core.columns import Columns
+
+from ..agents.action_filter import ActionFilter
+from ..agents.jitter import JitterCorrection
+from ..game.constants import TEAM
+from .env import unpack_raw
+from .rl_module import LEARNER
+
+FILTERS_KEY = "learner_filters"
+
+
+class ModuleAction:
+    """An Agent that plays the action the RL module chose (the core of the wrapper stack)."""
+
+    action = 0
+
+    def reset(self, agent_id: int, game_type: int, rng: np.random.Generator) -> None:
+        pass
+
+    def act(self, obs) -> int:
+        return self.action
+
+
+class EpisodeFilters:
+    """One episode's wrapper stack for the learner, and its counts."""
+
+    def __init__(self, flags: dict, seat: int, first_raw: np.ndarray):
+        self.flags = flags
+        self.core = ModuleAction()
+        agent = self.core
+        if flags.get("jitter"):
+            agent = JitterCorrection(agent)
+        if flags.get("action_filter"):
+            agent = ActionFilter(agent)
+        agent.reset(seat, int(TEAM.game_type),
+                    np.random.default_rng(np.frombuffer(first_raw.tobytes(), np.uint8)))
+        self.agent = agent
+        self.steps = 0
+        self.overridden = 0
+
+    def act(self, action: int, raw: np.ndarray) -> int:
+        self.core.action = action
+        executed = int(self.agent.act(unpack_raw(raw))) if self.agent is not self.core else action
+        self.steps += 1
+        self.overridden += executed != action
+        return executed
+
+
+def _log_softmax(logits: np.ndarray) -> np.ndarray:
+    shifted = logits - logits.max()
+    return shifted - np.log(np.exp(shifted).sum())
+
+
+class LearnerFilters(ConnectorV2):
+    def __call__(self, *, rl_module, batch, episodes, explore=None, shared_data=None,
+                 metrics=None, **kwargs):
+        by_id = {episode.id_: episode for episode in episodes}
+        for key, actions in batch[Columns.ACTIONS].items():
+            episode_id, agent_id, module_id = key
+            if module_id != LEARNER:
+                continue
+            episode = by_id[episode_id]
+            agent_episode = episode.agent_episodes[agent_id]
+            raw = agent_episode.get_observations(-1)["raw"]
+            filters = episode.custom_data.get(FILTERS_KEY)
+            if filters is None:
+                flags = agent_episode.get_infos(-1).get("filters", {})
+                filters = episode.custom_data[FILTERS_KEY] = EpisodeFilters(flags, agent_id, raw)
+            chosen = int(actions[0])
+            executed = filters.act(chosen, raw)
+            if executed == chosen:
+                continue
+            actions[0] = executed
+            if Columns.ACTION_LOGP in batch:
+                logits = np.asarray(batch[Columns.ACTION_DIST_INPUTS][key][0], np.float64)
+                batch[Columns.ACTION_LOGP][key][0] = np.float32(_log_softmax(logits)[executed])
+        return batch

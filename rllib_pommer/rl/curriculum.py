@@ -1,0 +1,181 @@
+"""Curricula as data: TOML files in the top-level `curriculum/` folder, checked on load.
+
+A file names the run, optionally the imitation weights pi starts from, PPO options, defaults for
+every stage, and the stages in order::
+
+    name = "paper"
+    pi_weights = "../policies/imitation/pi.pt"   # relative to this file
+    [ppo]
+    train_batch_size = 4000
+    [defaults]
+    teammate = "suicide"
+    [[stage]]
+    name = "warmup"
+    opponent = "simple"
+    episodes = 10000
+    freeze_pi = true
+
+A stage lasts `episodes` lifetime episodes (counted over all env runners). Policies are names from
+`policies/` (scripted kinds, or frozen learned / RLlib-checkpoint policies). Every error names the
+file, the key and the valid choices, so a typo fails before Ray starts.
+"""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass, fields
+from pathlib import Path
+from typing import Any
+
+from ..agents.registry import policy_names, resolve_policy
+from .env import REWARD_MODES
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+CURRICULUM_DIR = Path(__file__).resolve().parents[2] / "curriculum"
+DEFAULT_PI_WEIGHTS = "../policies/imitation/pi.pt"
+SCRIPTED_KINDS = ("static", "random", "simple", "simple_nobomb", "smart_random", "suicide")
+NET_KINDS = ("learned", "rllib_checkpoint")
+# PPO options a file may set (the paper fixes entropy 0, clip 0.01 and minibatch 128).
+PPO_OPTIONS = {
+    "lr": 1e-4,
+    "gamma": 0.99,
+    "lambda": 0.95,
+    "num_epochs": 4,
+    "train_batch_size": 4000,
+    "num_envs_per_env_runner": 8,
+    "vf_loss_coeff": 1.0,
+    "checkpoint_every": 5,
+}
+TOP_KEYS = ("name", "description", "pi_weights", "max_steps", "ppo", "defaults", "stage")
+
+
+@dataclass(frozen=True)
+class Stage:
+    name: str
+    opponent: str
+    episodes: int
+    teammate: str = "suicide"
+    reward: str = "shaped"
+    action_filter: float = 0.3
+    jitter: float = 0.1
+    freeze_pi: bool = False
+
+
+STAGE_KEYS = tuple(f.name for f in fields(Stage))
+
+
+@dataclass(frozen=True)
+class Curriculum:
+    name: str
+    path: Path
+    stages: tuple[Stage, ...]
+    pi_weights: Path
+    max_steps: int
+    ppo: dict[str, Any]
+
+    @property
+    def total_episodes(self) -> int:
+        return sum(stage.episodes for stage in self.stages)
+
+    def stage_at(self, episodes: int) -> int:
+        """Index of the stage in force after `episodes` lifetime episodes (the last one at the
+        end, so a run that overshoots keeps its final setting)."""
+        end = 0
+        for index, stage in enumerate(self.stages):
+            end += stage.episodes
+            if episodes < end:
+                return index
+        return len(self.stages) - 1
+
+    def policies(self) -> list[str]:
+        """Every policy some stage plays, in first-use order (one fixed module each)."""
+        names: list[str] = []
+        for stage in self.stages:
+            for name in (stage.teammate, stage.opponent):
+                if name not in names:
+                    names.append(name)
+        return names
+
+
+def curriculum_names() -> list[str]:
+    return sorted(path.stem for path in CURRICULUM_DIR.glob("*.toml"))
+
+
+def find_curriculum(name_or_path: str | Path) -> Path:
+    path = Path(name_or_path)
+    if path.is_file():
+        return path.resolve()
+    named = CURRICULUM_DIR / f"{name_or_path}.toml"
+    if named.is_file():
+        return named
+    raise ValueError(f"curriculum {str(name_or_path)!r} not found; valid names: "
+                     f"{curriculum_names()} (in {CURRICULUM_DIR}), or a path to a .toml file")
+
+
+def _check_keys(where: str, table: dict, valid) -> None:
+    for key in table:
+        if key not in valid:
+            raise ValueError(f"{where}: unknown key {key!r}; valid keys: {sorted(valid)}")
+
+
+def _check_policy(where: str, name: Any) -> None:
+    try:
+        spec = resolve_policy(name)
+    except ValueError:
+        raise ValueError(f"{where}: unknown policy {name!r}; valid: {policy_names()}") from None
+    if spec.filters or spec.kind not in SCRIPTED_KINDS + NET_KINDS:
+        raise ValueError(f"{where}: policy {name!r} cannot be a fixed module (kind {spec.kind!r}, "
+                         f"filters {list(spec.filters)}); valid: {policy_names()} without "
+                         f"filter suffixes, of kinds {list(SCRIPTED_KINDS + NET_KINDS)}")
+
+
+def _stage(where: str, table: dict) -> Stage:
+    _check_keys(where, table, STAGE_KEYS)
+    for key in ("name", "opponent", "episodes"):
+        if key not in table:
+            raise ValueError(f"{where}: missing key {key!r}")
+    stage = Stage(**table)
+    if not isinstance(stage.episodes, int) or stage.episodes <= 0:
+        raise ValueError(f"{where}: episodes must be a positive integer, got {stage.episodes!r}")
+    if stage.reward not in REWARD_MODES:
+        raise ValueError(f"{where}: reward {stage.reward!r} is not one of {list(REWARD_MODES)}")
+    for key in ("action_filter", "jitter"):
+        value = getattr(stage, key)
+        if not isinstance(value, (int, float)) or not 0 <= value <= 1:
+            raise ValueError(f"{where}: {key} must be a probability in [0, 1], got {value!r}")
+    _check_policy(f"{where} key 'opponent'", stage.opponent)
+    _check_policy(f"{where} key 'teammate'", stage.teammate)
+    return stage
+
+
+def load_curriculum(name_or_path: str | Path) -> Curriculum:
+    """The curriculum of a name in `curriculum/` or of a file path, validated."""
+    path = find_curriculum(name_or_path)
+    try:
+        with path.open("rb") as f:
+            data = tomllib.load(f)
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"curriculum file {path}: invalid TOML ({exc})") from None
+    where = f"curriculum file {path}"
+    _check_keys(where, data, TOP_KEYS)
+    ppo = data.get("ppo", {})
+    _check_keys(f"{where} [ppo]", ppo, PPO_OPTIONS)
+    defaults = data.get("defaults", {})
+    _check_keys(f"{where} [defaults]", defaults, set(STAGE_KEYS) - {"name", "episodes"})
+    tables = data.get("stage", [])
+    if not tables:
+        raise ValueError(f"{where}: no [[stage]] tables")
+    stages = tuple(_stage(f"{where} stage {i + 1}", {**defaults, **table})
+                   for i, table in enumerate(tables))
+    return Curriculum(
+        name=data.get("name", path.stem),
+        path=path,
+        stages=stages,
+        pi_weights=(path.parent / data.get("pi_weights", DEFAULT_PI_WEIGHTS)).resolve(),
+        max_steps=int(data.get("max_steps", 800)),
+        ppo={**PPO_OPTIONS, **ppo},
+    )

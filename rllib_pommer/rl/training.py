@@ -1,0 +1,110 @@
+"""One training run of a curriculum through Tune: checkpoints, TensorBoard logs, progress, resume.
+
+The run directory holds one Tune experiment: `<run>/<trial>/checkpoint_*` (ordinary RLlib
+checkpoints), the trial's `result.json`, `progress.csv` and TensorBoard event files. The run stops
+once the lifetime episode count reaches the curriculum's total. `resume` restores the experiment
+(`tune.Tuner.restore`): the trial continues from its last checkpoint, and since the stage follows
+from the restored lifetime episode count, stage and counters pick up where they were, also after a
+SIGKILL.
+"""
+
+from __future__ import annotations
+
+import os
+import socket
+import time
+from pathlib import Path
+
+import ray
+import torch
+from ray import tune
+
+from .config import build_config
+from .curriculum import Curriculum
+
+STOP_KEY = "env_runners/num_episodes_lifetime"
+
+
+def init_ray(address: str | None) -> None:
+    """Ray on this machine (at most 2 CPUs), or on an existing cluster at `address`."""
+    torch.set_num_threads(1)
+    torch.set_flush_denormal(True)
+    if address is None:
+        ray.init(num_cpus=2, include_dashboard=False)
+        return
+    if address != "auto":
+        host, _, port = address.removeprefix("ray://").rpartition(":")
+        try:
+            socket.create_connection((host or "127.0.0.1", int(port)), timeout=5).close()
+        except (OSError, ValueError) as exc:
+            raise ValueError(f"Ray address {address!r} is unreachable ({exc}); expected "
+                             f"HOST:PORT of a running cluster's head, or 'auto'") from None
+    ray.init(address=address)
+
+
+def _duration(seconds: float) -> str:
+    minutes, seconds = divmod(int(seconds), 60)
+    return f"{minutes // 60}h{minutes % 60:02d}m" if minutes >= 60 else f"{minutes}m{seconds:02d}s"
+
+
+class Progress(tune.Callback):
+    """One line per iteration: stage, episodes, win/loss/tie, env steps/s and time left."""
+
+    def __init__(self):
+        self._start = time.monotonic()
+        self._first_episodes: int | None = None
+
+    def on_trial_result(self, iteration, trials, trial, result, **info):
+        stage = result.get("curriculum", {})
+        runners = result.get("env_runners", {})
+        episodes, total = stage.get("episodes", 0), stage.get("total_episodes", 0)
+        if self._first_episodes is None:
+            self._first_episodes = episodes
+        elapsed = time.monotonic() - self._start
+        rate = (episodes - self._first_episodes) / elapsed if elapsed > 0 else 0.0
+        eta = _duration(max(total - episodes, 0) / rate) if rate > 0 else "?"
+        steps_per_s = runners.get("num_env_steps_sampled", 0) / max(result["time_this_iter_s"],
+                                                                       1e-9)
+        print(f"[{stage.get('stage', 0) + 1}:{stage.get('stage_name', '?')}] "
+              f"iter {result['training_iteration']}  episodes {episodes}/{total}  "
+              f"W/L/T {runners.get('learner_win', 0):.2f}/{runners.get('learner_loss', 0):.2f}/"
+              f"{runners.get('learner_tie', 0):.2f}  return {runners.get('learner_return', 0):+.2f}"
+              f"  {steps_per_s:.0f} env steps/s  ETA {eta}", flush=True)
+
+
+def train(curriculum: Curriculum, out: Path, *, resume: bool = False,
+          pi_weights: str | Path | None = None, num_env_runners: int = 0, seed: int = 0):
+    """Run (or resume) `curriculum` into the run directory `out`; Ray must be initialised."""
+    out = Path(out).resolve()
+    # Snapshot the experiment state on every controller step (not every ~10 s), so the state on
+    # disk always names the latest trial checkpoint and a SIGKILLed run resumes from it.
+    os.environ.setdefault("TUNE_GLOBAL_CHECKPOINT_S", "0")
+    config = build_config(curriculum, pi_weights=pi_weights, num_env_runners=num_env_runners,
+                          seed=seed)
+    if resume:
+        if not tune.Tuner.can_restore(str(out)):
+            raise ValueError(f"--resume: no run to resume in {out}")
+        tuner = tune.Tuner.restore(str(out), trainable=config.algo_class, param_space=config,
+                                   resume_unfinished=True, resume_errored=True)
+    else:
+        if tune.Tuner.can_restore(str(out)):
+            raise ValueError(f"{out} already holds a run; pass --resume or another --out")
+        tuner = tune.Tuner(
+            config.algo_class,
+            param_space=config,
+            run_config=tune.RunConfig(
+                name=out.name,
+                storage_path=str(out.parent),
+                stop={STOP_KEY: curriculum.total_episodes},
+                checkpoint_config=tune.CheckpointConfig(
+                    checkpoint_frequency=curriculum.ppo["checkpoint_every"],
+                    checkpoint_at_end=True, num_to_keep=3),
+                callbacks=[Progress()],
+                verbose=0,
+            ),
+        )
+    results = tuner.fit()
+    result = results[0]
+    if result.error:
+        raise RuntimeError(f"training failed: {result.error}")
+    return result

@@ -1,0 +1,53 @@
+"""One agent of a named policy playing one seat of one game at a time, like a competition container.
+
+The protocol carries no seed, so unless the caller sends our optional one, game k started by this
+host draws its agent's randomness from `default_rng([seed, k])`: a restarted server with the same
+`--seed` replays the same games when asked the same observations.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from typing import NamedTuple
+
+import numpy as np
+
+from .. import learned  # noqa: F401  (registers the "learned" policy kind)
+from ..agents.registry import make_agent
+from ..game.observation import Observation
+from .protocol import BadRequest
+
+
+class Seat(NamedTuple):
+    agent_id: int
+    game_type: int
+
+
+class PolicyHost:
+    def __init__(self, policy: str, filters: Iterable[str] = (), seed: int = 0):
+        self.agent = make_agent(policy, filters)
+        self.seed = seed
+        self.games_started = 0
+        self.seat: Seat | None = None  # set by the first /init_agent
+
+    def start_game(self, seat: Seat, rng: np.random.Generator | None = None) -> None:
+        """Reset the agent for a new game on `seat`, with `rng` or the host's next game seed."""
+        if rng is None:
+            rng = np.random.default_rng([self.seed, self.games_started])
+        self.games_started += 1
+        self.seat = seat
+        self.agent.reset(seat.agent_id, seat.game_type, rng)
+
+    def seated(self, endpoint: str) -> Seat:
+        """The seat being played; `endpoint` names the request that needs one."""
+        if self.seat is None:
+            raise BadRequest(f"{endpoint} before /init_agent: no game is being played")
+        return self.seat
+
+    def act(self, obs: Observation) -> int:
+        return int(self.agent.act(obs))
+
+    def end_game(self) -> None:
+        """The competition's runner seated its agents once and ended every game with
+        /episode_end, so the next game on the same seat starts here."""
+        self.start_game(self.seated("/episode_end"))

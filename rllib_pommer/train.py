@@ -1,0 +1,61 @@
+"""PPO from the imitation policy through a curriculum (Meisheri et al. 2019), on Ray RLlib.
+
+    python -m rllib_pommer.train [--curriculum NAME|FILE] [--out RUN_DIR] [--resume]
+                                 [--address RAY_ADDRESS] [--pi-weights FILE]
+
+Curricula are TOML files in `curriculum/` (default "quick"; "paper" is the paper's schedule). The
+run directory (default runs/<curriculum name>) gets RLlib checkpoints and TensorBoard logs;
+`--resume` continues an interrupted run from its last checkpoint. The arena plays a run's learner
+by its directory: `python -m rllib_pommer.evaluate --team runs/quick --vs static`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+DEFAULT_CURRICULUM = "quick"
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m rllib_pommer.train", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--curriculum", default=DEFAULT_CURRICULUM,
+                        help="a name in curriculum/ or a .toml path (default: %(default)s)")
+    parser.add_argument("--out", type=Path, help="run directory (default: runs/<name>)")
+    parser.add_argument("--resume", action="store_true", help="continue the run in --out")
+    parser.add_argument("--address", help="an existing Ray cluster (HOST:PORT or 'auto')")
+    parser.add_argument("--pi-weights", help="pi state_dict to start from (overrides the file)")
+    parser.add_argument("--num-env-runners", type=int, default=0,
+                        help="remote env runners (0: sample in the driver; use more on a cluster)")
+    parser.add_argument("--seed", type=int, default=0)
+    args = parser.parse_args(argv)
+
+    # Imports after parsing, so --help is instant.
+    import ray
+
+    from .rl.curriculum import load_curriculum
+    from .rl.training import init_ray, train
+
+    try:
+        curriculum = load_curriculum(args.curriculum)
+        out = args.out or Path("runs") / curriculum.name
+        init_ray(args.address)
+    except ValueError as exc:
+        parser.error(str(exc))
+    try:
+        result = train(curriculum, out, resume=args.resume, pi_weights=args.pi_weights,
+                       num_env_runners=args.num_env_runners, seed=args.seed)
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    finally:
+        ray.shutdown()
+    checkpoint = result.checkpoint.path if result.checkpoint else "-"
+    print(f"done: {result.path} (checkpoint {checkpoint})")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,50 @@
+"""Errors name the file, the key and the valid choices; missing weights and addresses are named."""
+
+from __future__ import annotations
+
+import pytest
+
+from rllib_pommer.rl.config import build_config
+from rllib_pommer.rl.curriculum import load_curriculum
+from rllib_pommer.rl.training import init_ray
+
+STAGE = '[[stage]]\nname = "a"\nopponent = "static"\nepisodes = 5\n'
+
+
+def _write(tmp_path, text):
+    path = tmp_path / "c.toml"
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize("text, words", [
+    (STAGE.replace('"static"', '"simpel"'), ["opponent", "simpel", "simple_nobomb"]),
+    (STAGE + 'teamate = "simple"\n', ["teamate", "teammate"]),
+    (STAGE.replace("episodes = 5", "episodes = -1"), ["episodes"]),
+    (STAGE + 'reward = "dense"\n', ["reward", "shaped", "raw"]),
+    ("[ppo]\nlearning_rate = 1\n" + STAGE, ["[ppo]", "learning_rate", "lr"]),
+    (STAGE.replace('"static"', '"simple_action"'), ["simple_action", "filter"]),
+])
+def test_curriculum_errors_name_file_key_and_choices(tmp_path, text, words):
+    path = _write(tmp_path, text)
+    with pytest.raises(ValueError) as info:
+        load_curriculum(path)
+    assert str(path) in str(info.value)
+    for word in words:
+        assert word in str(info.value)
+
+
+def test_unknown_curriculum_name_lists_names():
+    with pytest.raises(ValueError, match="paper"):
+        load_curriculum("no_such_curriculum")
+
+
+def test_missing_imitation_weights(tmp_path):
+    curriculum = load_curriculum(_write(tmp_path, STAGE))
+    with pytest.raises(ValueError, match="imitation weights not found"):
+        build_config(curriculum, pi_weights=tmp_path / "absent.pt")
+
+
+def test_unreachable_ray_address():
+    with pytest.raises(ValueError, match="unreachable"):
+        init_ray("127.0.0.1:1")

@@ -1,0 +1,116 @@
+"""A smoke run in-process: stage boundary, warm-up freeze, the filter connector, checkpoint ->
+restore -> arena."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+from ray.tune.registry import register_env
+
+from rllib_pommer.arena import MatchSpec, play_match
+from rllib_pommer.rl.checkpoint_policy import load_checkpoint_net
+from rllib_pommer.rl.config import build_config
+from rllib_pommer.rl.curriculum import load_curriculum
+from rllib_pommer.rl.env import PommeEnv
+from rllib_pommer.rl.rl_module import LEARNER
+
+ECHO_ENV = "pommerman_team_echo"
+
+
+class EchoEnv(PommeEnv):
+    """Reports in each info the action the env executed for that agent on the step."""
+
+    def step(self, action_dict):
+        out = super().step(action_dict)
+        for agent, info in out[4].items():
+            info["executed"] = int(action_dict[agent])
+        return out
+
+
+register_env(ECHO_ENV, EchoEnv)
+
+
+def _snapshot(module):
+    return {k: v.detach().clone() for k, v in module.state_dict().items()}
+
+
+def _changed(before, after):
+    return any(not torch.equal(before[k], after[k]) for k in before)
+
+
+@pytest.fixture(scope="module")
+def smoke(ray_session, pi_weights, tmp_path_factory):
+    curriculum = load_curriculum("smoke")
+    config = build_config(curriculum, pi_weights=pi_weights, env=ECHO_ENV)
+    algo = config.build_algo()
+    learner = algo.learner_group._learner.module[LEARNER]
+    iterations = []
+    stage = 0
+    while True:
+        pi, vf = _snapshot(learner.pi), _snapshot(learner.vf)
+        result = algo.train()
+        iterations.append({"stage": stage, "pi_changed": _changed(pi, _snapshot(learner.pi)),
+                           "vf_changed": _changed(vf, _snapshot(learner.vf)), "result": result})
+        stage = result["curriculum"]["stage"]
+        if result["curriculum"]["episodes"] >= curriculum.total_episodes:
+            break
+    episodes = algo.env_runner.sample(num_timesteps=300, explore=True)
+    checkpoint = algo.save(str(tmp_path_factory.mktemp("ckpt"))).checkpoint.path
+    learner_pi = _snapshot(learner.pi)
+    algo.stop()
+    yield {"config": config, "iterations": iterations, "episodes": episodes,
+           "checkpoint": checkpoint, "learner_pi": learner_pi, "curriculum": curriculum}
+
+
+def test_stage_boundary_and_warmup_freeze(smoke):
+    iterations = smoke["iterations"]
+    stages = [it["stage"] for it in iterations]
+    assert stages[0] == 0 and stages[-1] == 1
+    for it in iterations:
+        assert it["vf_changed"]
+        assert it["pi_changed"] == (it["stage"] == 1), "pi must move only after the warm-up"
+    last = iterations[-1]["result"]["env_runners"]
+    assert {"learner_win", "learner_loss", "learner_tie", "learner_return"} <= set(last)
+    shares = [it["result"]["env_runners"].get("learner_override_share", 0) for it in iterations]
+    assert max(shares) > 0, "the filters never overrode an action"
+
+
+def _log_softmax(x):
+    x = np.asarray(x, np.float64)
+    x = x - x.max(-1, keepdims=True)
+    return x - np.log(np.exp(x).sum(-1, keepdims=True))
+
+
+def test_connector_stores_the_executed_action_with_its_logp(smoke):
+    checked = 0
+    for episode in smoke["episodes"]:
+        for agent_episode in episode.agent_episodes.values():
+            if agent_episode.module_id != LEARNER or len(agent_episode) == 0:
+                continue
+            actions = np.asarray(agent_episode.get_actions())
+            infos = agent_episode.get_infos()
+            executed = [info["executed"] for info in infos[1:]]
+            assert actions.tolist() == executed
+            logp = np.asarray(agent_episode.get_extra_model_outputs("action_logp"))
+            logits = np.asarray(agent_episode.get_extra_model_outputs("action_dist_inputs"))
+            expected = _log_softmax(logits)[np.arange(len(actions)), actions]
+            np.testing.assert_allclose(logp, expected, atol=1e-4)
+            checked += len(actions)
+    assert checked > 50
+
+
+def test_checkpoint_restores_stage_and_plays_in_the_arena(smoke):
+    algo = smoke["config"].build_algo()
+    try:
+        algo.restore(smoke["checkpoint"])
+        assert algo.env_runner.config.policy_mapping_fn.stage == 1
+        assert not algo.learner_group._learner.module[LEARNER].pi_frozen
+    finally:
+        algo.stop()
+    net = load_checkpoint_net(smoke["checkpoint"])
+    for key, value in net.state_dict().items():
+        assert torch.equal(value, smoke["learner_pi"][key])
+    records = list(play_match(MatchSpec(team=smoke["checkpoint"], vs="static", games=4),
+                              workers=1))
+    assert len(records) == 4

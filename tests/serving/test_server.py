@@ -1,0 +1,148 @@
+"""The served side of the protocol: answers, seeding, and 400s that name the problem."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import requests
+
+from rllib_pommer.agents.registry import make_agent
+from rllib_pommer.serve import main as serve_main
+from rllib_pommer.serving.app import MAX_BODY_BYTES
+
+from .conftest import obs_text, team_observations
+
+SEAT = 1
+
+
+def post(port: int, endpoint: str, body) -> requests.Response:
+    data = body if isinstance(body, bytes) else json.dumps(body).encode()
+    return requests.post(f"http://127.0.0.1:{port}/{endpoint}", data=data, timeout=5)
+
+
+def init(port: int, seat: int = SEAT, **extra) -> None:
+    body = {"id": json.dumps(seat), "game_type": "2", **extra}
+    assert post(port, "init_agent", body).json() == {"success": True}
+
+
+def served_actions(port: int, observations) -> list[int]:
+    return [post(port, "action", {"obs": obs_text(o), "action_space": "6"}).json()["action"]
+            for o in observations]
+
+
+def local_actions(policy: str, rng: np.random.Generator, observations) -> list[int]:
+    agent = make_agent(policy)
+    agent.reset(SEAT, 2, rng)
+    return [agent.act(o) for o in observations]
+
+
+def test_ping_and_actions_equal_the_in_process_agent(serve):
+    port = serve("simple")
+    assert requests.get(f"http://127.0.0.1:{port}/ping", timeout=5).json() == {"success": True}
+    observations = team_observations(SEAT, 60)
+    init(port, seed="11")
+    assert served_actions(port, observations) == local_actions(
+        "simple", np.random.default_rng(11), observations)
+
+
+def test_a_generator_state_as_seed_continues_the_callers_stream(serve):
+    port, rng = serve("random"), np.random.default_rng([4, 2])
+    observations = team_observations(SEAT, 30)
+    init(port, seed=json.dumps(rng.bit_generator.state))
+    assert served_actions(port, observations) == local_actions("random", rng, observations)
+
+
+def test_unseeded_games_count_from_the_server_seed_and_episode_end_starts_the_next(serve):
+    port, observations = serve("random", seed=5), team_observations(SEAT, 30)
+    init(port)
+    first = served_actions(port, observations)
+    assert post(port, "episode_end", {"reward": "-1"}).json() == {"success": True}
+    second = served_actions(port, observations)
+    init(port)
+    third = served_actions(port, observations)
+    for game, actions in enumerate([first, second, third]):
+        rng = np.random.default_rng([5, game])
+        assert actions == local_actions("random", rng, observations)
+
+
+OBS = obs_text(team_observations(SEAT, 1)[0])
+NO_BOARD = json.dumps({k: v for k, v in json.loads(OBS).items() if k != "board"})
+OFF_BOARD = json.dumps({**json.loads(OBS), "position": [3, 11]})
+INIT = {"id": "1", "game_type": "2"}
+
+
+@pytest.mark.parametrize("endpoint, body, message", [
+    ("init_agent", b"{not json", "request body is not JSON"),
+    ("init_agent", b"[1, 2]", "request body must be a JSON object, got list"),
+    ("init_agent", {"game_type": "2"}, "missing field 'id'"),
+    ("init_agent", {"id": 1, "game_type": "2"}, "field 'id' must be a JSON-encoded string"),
+    ("init_agent", {"id": "one", "game_type": "2"}, "field 'id' does not hold JSON"),
+    ("init_agent", {"id": "\"1\"", "game_type": "2"}, "field 'id' must encode an integer"),
+    ("init_agent", {"id": "4", "game_type": "2"}, "field 'id' must be in 0..3, got 4"),
+    ("init_agent", {"id": "1", "game_type": "3"}, "field 'game_type' must be in 1..2, got 3"),
+    ("init_agent", {**INIT, "seed": "-1"}, "field 'seed' must be non-negative"),
+    ("init_agent", {**INIT, "seed": "{\"bit_generator\": \"MT19937\"}"},
+     "bit generator 'MT19937' is not one of"),
+    ("init_agent", {**INIT, "seed": "{\"bit_generator\": \"PCG64\"}"}, "not a valid PCG64 state"),
+    ("action", {"action_space": "6"}, "missing field 'obs'"),
+    ("action", {"obs": "{\"board\": "}, "field 'obs' does not hold JSON"),
+    ("action", {"obs": "[]"}, "observation of agent 1: expected an object, got list"),
+    ("action", {"obs": NO_BOARD}, "observation of agent 1: missing field 'board'"),
+    ("action", {"obs": OFF_BOARD}, "observation of agent 1.position: value 11 outside [0, 10]"),
+    ("episode_end", {"reward": "\"won\""}, "field 'reward' must encode a number"),
+])
+def test_malformed_requests_get_400_naming_the_problem_and_the_server_keeps_going(
+        serve, endpoint, body, message):
+    port = serve("simple")
+    init(port)
+    response = post(port, endpoint, body)
+    assert response.status_code == 400
+    assert message in response.json()["error"]
+    assert post(port, "action", {"obs": OBS, "action_space": "6"}).json()["action"] in range(6)
+
+
+@pytest.mark.parametrize("endpoint", ["action", "episode_end"])
+def test_a_game_must_be_started_first(serve, endpoint):
+    body = {"obs": OBS} if endpoint == "action" else {"reward": "0"}
+    response = post(serve("static"), endpoint, body)
+    assert response.status_code == 400
+    assert response.json()["error"].startswith(f"/{endpoint} before /init_agent")
+
+
+def test_observations_of_another_seat_are_refused(serve):
+    port = serve("static")
+    init(port, seat=3)  # teammate 11, but the observation is seat 1's (teammate 13)
+    response = post(port, "action", {"obs": OBS})
+    assert response.status_code == 400
+    assert "two seats need two servers" in response.json()["error"]
+
+
+def test_bodies_are_bounded(serve):
+    port = serve("static")
+    init(port)
+    huge = {"obs": OBS, "padding": "x" * MAX_BODY_BYTES}
+    assert post(port, "action", huge).status_code == 413
+    assert post(port, "action", {"obs": OBS}).json() == {"action": 0}
+
+
+def test_the_command_serves_until_shutdown():
+    command = [sys.executable, "-m", "rllib_pommer.serve", "--policy", "static", "--port", "0"]
+    with subprocess.Popen(command, stdout=subprocess.PIPE, text=True) as server:
+        try:
+            banner = server.stdout.readline()
+            assert banner.startswith("serving static on http://127.0.0.1:")
+            port = int(banner.rsplit(":", 1)[1])
+            assert requests.get(f"http://127.0.0.1:{port}/ping", timeout=5).ok
+            assert post(port, "shutdown", {}).json() == {"success": True}
+            assert server.wait(timeout=20) == 0
+        finally:
+            server.kill()
+
+
+def test_the_command_rejects_unknown_policies(capsys):
+    assert serve_main(["--policy", "simpel"]) == 2
+    assert "unknown policy 'simpel'" in capsys.readouterr().err
