@@ -6,7 +6,8 @@ flattened with "/" as Tune does), one row per training iteration. Columns used:
 - the mean episode return: the first present of `RETURN_COLUMNS` (required);
 - the episode count: `env_runners/num_episodes_lifetime` (cumulative) or, failing that,
   `env_runners/num_episodes` (per iteration) (one of them required);
-- the curriculum phase: `curriculum_stage` or `curriculum_kind` (optional; without it the run
+- the curriculum phase: `curriculum/stage_name` (what `python -m rllib_pommer.train` logs),
+  `curriculum_stage` or `curriculum_kind` (optional; without it the run
   is one phase).
 
 Rows without a return (empty or NaN: no episode finished yet) are skipped. Each row's mean is
@@ -29,7 +30,7 @@ RETURN_COLUMNS = ("env_runners/module_episode_returns_mean/learner",
                   "env_runners/episode_return_mean", "episode_reward_mean")
 LIFETIME_COLUMNS = ("env_runners/num_episodes_lifetime", "num_episodes_lifetime")
 PER_ITERATION_COLUMNS = ("env_runners/num_episodes", "episodes_this_iter")
-STAGE_COLUMNS = ("curriculum_stage", "curriculum_kind")
+STAGE_COLUMNS = ("curriculum/stage_name", "curriculum_stage", "curriculum_kind")
 TRIAL_FILES = ("progress.csv", "result.json")
 WINDOW = 1000
 
