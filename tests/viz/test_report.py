@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
-import csv
 import json
 
 import numpy as np
 from PIL import Image
 
+from rllib_pommer.arena import GameRecord
+from rllib_pommer.evaluate import write_records
 from rllib_pommer.game.records import write_games
 from rllib_pommer.report import main
 
@@ -15,17 +16,9 @@ from .conftest import play_recorded
 
 
 def write_rows(path, results):
-    rows = [{"game": g, "seed": 0, "seats_a": [0, 2] if g % 2 == 0 else [1, 3], "result": r,
-             "length": 100, "died": [False] * 4, "own_bomb_deaths": [False] * 4,
-             "bombs_laid": [1] * 4} for g, r in enumerate(results)]
-    if path.suffix == ".csv":
-        with open(path, "w", newline="") as f:
-            writer = csv.DictWriter(f, fieldnames=list(rows[0]))
-            writer.writeheader()
-            writer.writerows({k: json.dumps(v) if isinstance(v, list) else v
-                              for k, v in row.items()} for row in rows)
-    else:
-        path.write_text("".join(json.dumps(row) + "\n" for row in rows))
+    """Arena records with the given results, written as `evaluate --records` writes them."""
+    write_records(path, [GameRecord(g, 0, [0, 2] if g % 2 == 0 else [1, 3], r, 100, [False] * 4,
+                                    [False] * 4, [1] * 4) for g, r in enumerate(results)])
 
 
 def assert_picture(path):
