@@ -45,6 +45,12 @@ class TrainingCurve:
     stages: list[str]
 
 
+def run_name(trial: Path) -> str:
+    """A trial's label: its run directory's name (`runs/quick` -> "quick") when Tune named the
+    trial itself (PPO_<env>_<id>...), else the trial directory's own name."""
+    return trial.parent.name if trial.name.startswith("PPO_") else trial.name
+
+
 def is_trial(path: Path) -> bool:
     return path.is_dir() and any((path / name).is_file() for name in TRIAL_FILES)
 
@@ -118,7 +124,7 @@ def training_curve(trial: Path, window: int = WINDOW) -> TrainingCurve:
     curve = np.full(len(means), np.nan)
     for start, end, _ in phases(stages):
         curve[start:end] = rolling_mean(means[start:end], counts[start:end], window)
-    return TrainingCurve(trial.name, episodes, curve, stages)
+    return TrainingCurve(run_name(trial), episodes, curve, stages)
 
 
 def phases(stages: list[str]) -> list[tuple[int, int, str]]:
