@@ -19,6 +19,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import torch
 
+from .agents.base import innermost
 from .agents.http_agent import HttpAgent
 from .agents.registry import make_agent
 from .game.blast import mark_blast
@@ -38,7 +39,7 @@ from .game.state import (
     B_ROW,
     M_BOMBS,
 )
-from .learned import LearnedAgent, innermost
+from .learned import LearnedAgent
 
 SEATS_A = ((0, 2), (1, 3))
 
@@ -216,9 +217,11 @@ def torch_threads_for_workers() -> None:
 
 
 def _plays_remote_agents(spec: MatchSpec) -> bool:
-    """A remote (HTTP) agent serves one seat of one game at a time, like a competition container."""
-    return any(isinstance(innermost(agent), HttpAgent)
-               for seats in SEATS_A for agent in _build_players(spec, seats))
+    """A remote (HTTP) agent serves one seat of one game at a time, like a competition container.
+
+    One seating holds both policies, so building its four agents also checks every name."""
+    players = _build_players(spec, SEATS_A[0])
+    return any(isinstance(innermost(agent), HttpAgent) for agent in players)
 
 
 def play_match(spec: MatchSpec, workers: int | None = None,

@@ -102,11 +102,4 @@ def _learned_agent(spec: PolicySpec) -> LearnedAgent:
     return LearnedAgent(_shared_policy(weights, bool(spec.params.get("greedy", False))))
 
 
-def innermost(agent):
-    """The agent at the core of its wrappers (they keep the wrapped agent as `.inner`)."""
-    while hasattr(agent, "inner"):
-        agent = agent.inner
-    return agent
-
-
 register_kind("learned", _learned_agent)

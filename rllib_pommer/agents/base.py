@@ -21,3 +21,10 @@ class Agent(Protocol):
 
     def act(self, obs: Observation) -> int:
         """One action code 0..5 for this observation."""
+
+
+def innermost(agent: Agent) -> Agent:
+    """The agent at the core of its wrappers (the filters keep the wrapped agent as `.inner`)."""
+    while hasattr(agent, "inner"):
+        agent = agent.inner
+    return agent
