@@ -42,7 +42,7 @@ NET_KINDS = ("learned", "rllib_checkpoint")
 # PPO options a file may set (the paper fixes entropy 0, clip 0.01 and minibatch 128).
 PPO_OPTIONS = {
     "lr": 1e-4,
-    "gamma": 0.99,
+    "gamma": 0.999,
     "lambda": 0.95,
     "num_epochs": 4,
     "train_batch_size": 4000,
