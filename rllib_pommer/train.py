@@ -53,6 +53,11 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         ray.shutdown()
     checkpoint = result.checkpoint.path if result.checkpoint else "-"
+    episodes = result.metrics.get("curriculum", {}).get("episodes", 0)
+    if episodes < curriculum.total_episodes:
+        print(f"stopped at episode {episodes} of {curriculum.total_episodes}: {result.path} "
+              f"(checkpoint {checkpoint}); continue with --resume --out {out}")
+        return 130
     print(f"done: {result.path} (checkpoint {checkpoint})")
     return 0
 

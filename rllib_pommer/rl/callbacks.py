@@ -85,6 +85,7 @@ class CurriculumCallback(RLlibCallback):
             "stage": index,
             "stage_name": self.curriculum.stages[index].name,
             "episodes": episodes,
+            "stage_end_episodes": self.curriculum.stage_end(index),
             "total_episodes": self.curriculum.total_episodes,
             "pi_frozen": self.curriculum.stages[index].freeze_pi,
         }

@@ -2,14 +2,15 @@
 
 Paper settings (fixed): entropy coefficient 0, clip 0.01, minibatch 128, no dropout.
 Others (our choices, overridable in a curriculum's [ppo] table, defaults in
-`curriculum.PPO_OPTIONS`): lr 1e-4 (small, to stay near the imitation policy); gamma 0.999, because
-every outcome is paid at the end and with 0.99 a tie's -1 some 400 steps away is worth -0.02 now,
-so waiting out the clock beats any risky attack (measured: the quick curriculum at 0.99 and lr 3e-4
-ended with every training game tied); GAE lambda 0.95, 4 epochs over batches of 4,000 env steps (~3,500 learner rows; all four agents
-step, and the learner's rows are the ones trained), value loss coefficient 1 with RLlib's default
-value clip 10 (returns are within [-1, 1]), no KL penalty (the clip does the work), gradient norm
-clip 10, 8 envs per env runner (batched inference, rllib-notes I), and 0 remote env runners on a
-2-core machine (more help only on a bigger cluster: `num_env_runners`).
+`curriculum.PPO_OPTIONS`): lr 1e-4 (small, to stay near the imitation policy); gamma 0.999,
+because every outcome is paid at the end and with 0.99 a tie's -1 some 400 steps away is worth
+-0.02 now, so waiting out the clock beats any risky attack (measured: the quick curriculum at 0.99
+and lr 3e-4 ended with every training game tied); GAE lambda 0.95; 4 epochs over batches of 4,000
+env steps (~3,500 learner rows; all four agents step, and the learner's rows are the ones
+trained); value loss coefficient 1 with RLlib's default value clip 10 (returns are within
+[-1, 1]); no KL penalty (the clip does the work); gradient norm clip 10; 8 envs per env runner
+(batched inference, rllib-notes I); and 0 remote env runners on a 2-core machine (more help only
+on a bigger cluster: `num_env_runners`).
 """
 
 from __future__ import annotations

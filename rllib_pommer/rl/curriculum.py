@@ -91,6 +91,10 @@ class Curriculum:
                 return index
         return len(self.stages) - 1
 
+    def stage_end(self, index: int) -> int:
+        """The lifetime episode count at which stage `index` ends."""
+        return sum(stage.episodes for stage in self.stages[:index + 1])
+
     def policies(self) -> list[str]:
         """Every policy some stage plays, in first-use order (one fixed module each)."""
         names: list[str] = []

@@ -47,8 +47,13 @@ def _duration(seconds: float) -> str:
     return f"{minutes // 60}h{minutes % 60:02d}m" if minutes >= 60 else f"{minutes}m{seconds:02d}s"
 
 
+def _eta(episodes_left: int, episodes_per_s: float) -> str:
+    return _duration(max(episodes_left, 0) / episodes_per_s) if episodes_per_s > 0 else "?"
+
+
 class Progress(tune.Callback):
-    """One line per iteration: stage, episodes, win/loss/tie, env steps/s and time left."""
+    """One line per iteration: stage, episodes, win/loss/tie, env steps/s and the time left in the
+    stage and in the run."""
 
     def __init__(self):
         self._start = time.monotonic()
@@ -62,14 +67,16 @@ class Progress(tune.Callback):
             self._first_episodes = episodes
         elapsed = time.monotonic() - self._start
         rate = (episodes - self._first_episodes) / elapsed if elapsed > 0 else 0.0
-        eta = _duration(max(total - episodes, 0) / rate) if rate > 0 else "?"
+        stage_end = stage.get("stage_end_episodes", total)
         steps_per_s = runners.get("num_env_steps_sampled", 0) / max(result["time_this_iter_s"],
                                                                        1e-9)
         print(f"[{stage.get('stage', 0) + 1}:{stage.get('stage_name', '?')}] "
               f"iter {result['training_iteration']}  episodes {episodes}/{total}  "
               f"W/L/T {runners.get('learner_win', 0):.2f}/{runners.get('learner_loss', 0):.2f}/"
               f"{runners.get('learner_tie', 0):.2f}  return {runners.get('learner_return', 0):+.2f}"
-              f"  {steps_per_s:.0f} env steps/s  ETA {eta}", flush=True)
+              f"  {steps_per_s:.0f} env steps/s  ETA stage {_eta(stage_end - episodes, rate)}, "
+              f"run {_eta(total - episodes, rate)}",
+              flush=True)
 
 
 def train(curriculum: Curriculum, out: Path, *, resume: bool = False,

@@ -1,0 +1,38 @@
+"""The shipped curricula load, and the stage in force follows the lifetime episode count."""
+
+from __future__ import annotations
+
+import pytest
+
+from rllib_pommer.rl.curriculum import curriculum_names, load_curriculum
+
+
+@pytest.mark.parametrize("name", curriculum_names())
+def test_every_shipped_curriculum_loads(name):
+    curriculum = load_curriculum(name)
+    assert curriculum.stages and curriculum.pi_weights.is_file()
+
+
+def test_paper_schedule_is_the_papers():
+    paper = load_curriculum("paper")
+    assert [(s.opponent, s.episodes, s.freeze_pi) for s in paper.stages] == [
+        ("simple", 10_000, True), ("static", 10_000, False),
+        ("simple_nobomb", 20_000, False), ("simple", 60_000, False)]
+    assert {(s.teammate, s.reward, s.action_filter, s.jitter) for s in paper.stages} == {
+        ("suicide", "shaped", 0.3, 0.1)}
+    assert paper.total_episodes == 100_000
+
+
+def test_stage_boundaries():
+    paper = load_curriculum("paper")
+    assert [paper.stage_end(i) for i in range(4)] == [10_000, 20_000, 40_000, 100_000]
+    assert [paper.stage_at(n) for n in (0, 9_999, 10_000, 39_999, 40_000, 99_999)] == \
+        [0, 0, 1, 2, 3, 3]
+    assert paper.stage_at(250_000) == 3  # an overshooting run keeps the last stage
+
+
+def test_variants_share_the_value_warmup():
+    for name in ("no_shaping", "no_curriculum", "cautious"):
+        first = load_curriculum(name).stages[0]
+        assert (first.opponent, first.episodes, first.freeze_pi) == ("simple", 10_000, True)
+        assert load_curriculum(name).total_episodes == 100_000
