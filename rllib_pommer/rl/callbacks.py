@@ -8,6 +8,10 @@ in `algorithm.config` (so checkpoints carry it), reward mode and filter probabil
 and pi's freeze on every learner (requires_grad is not checkpointed). A restarted env runner or a
 restored run therefore picks up the right stage by itself.
 
+The iteration that ends a stage asks Tune for a checkpoint (`should_checkpoint`) and names the
+stage (`curriculum/ended_stage`), so the state at every stage's end is saved (training.py keeps
+it apart from Tune's rotation).
+
 Per episode the learner's true outcome (win/loss/tie of its team), its return under the stage's
 reward mode and the share of its actions the filters overrode are logged; they appear under
 `env_runners/` in the results.
@@ -16,7 +20,8 @@ reward mode and the share of its actions the filters overrode are logged; they a
 from __future__ import annotations
 
 from ray.rllib.callbacks.callbacks import RLlibCallback
-from ray.rllib.utils.metrics import ENV_RUNNER_RESULTS, NUM_EPISODES_LIFETIME
+from ray.rllib.utils.metrics import ENV_RUNNER_RESULTS, NUM_EPISODES, NUM_EPISODES_LIFETIME
+from ray.tune.result import SHOULD_CHECKPOINT
 
 from .connectors import FILTERS_KEY
 from .curriculum import Curriculum
@@ -81,6 +86,11 @@ class CurriculumCallback(RLlibCallback):
     def on_train_result(self, *, algorithm, result, **kwargs) -> None:
         episodes = int(result[ENV_RUNNER_RESULTS].get(NUM_EPISODES_LIFETIME, 0))
         index = self.apply_stage(algorithm, episodes)
+        before = self.curriculum.stage_at(episodes - int(result[ENV_RUNNER_RESULTS].get(
+            NUM_EPISODES, 0)))
+        ended = self.curriculum.stages[before].name if before != index else None
+        if ended:
+            result[SHOULD_CHECKPOINT] = True  # Tune saves the state at the stage's end
         result["curriculum"] = {
             "stage": index,
             "stage_name": self.curriculum.stages[index].name,
@@ -88,6 +98,7 @@ class CurriculumCallback(RLlibCallback):
             "stage_end_episodes": self.curriculum.stage_end(index),
             "total_episodes": self.curriculum.total_episodes,
             "pi_frozen": self.curriculum.stages[index].freeze_pi,
+            "ended_stage": f"{before + 1}-{ended}" if ended else None,
         }
 
     def on_episode_end(self, *, episode, prev_episode_chunks=None, metrics_logger=None,

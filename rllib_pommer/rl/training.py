@@ -1,16 +1,18 @@
 """One training run of a curriculum through Tune: checkpoints, TensorBoard logs, progress, resume.
 
 The run directory holds one Tune experiment: `<run>/<trial>/checkpoint_*` (ordinary RLlib
-checkpoints), the trial's `result.json`, `progress.csv` and TensorBoard event files. The run stops
-once the lifetime episode count reaches the curriculum's total. `resume` restores the experiment
-(`tune.Tuner.restore`): the trial continues from its last checkpoint, and since the stage follows
-from the restored lifetime episode count, stage and counters pick up where they were, also after a
-SIGKILL.
+checkpoints, the latest three), the trial's `result.json`, `progress.csv` and TensorBoard event
+files, and `<run>/stages/<n>-<name>/`, the checkpoint at the end of each finished stage. The run
+stops once the lifetime episode count reaches the curriculum's total. `resume` restores the
+experiment (`tune.Tuner.restore`): the trial continues from its last checkpoint, and since the
+stage follows from the restored lifetime episode count, stage and counters pick up where they
+were, also after a SIGKILL.
 """
 
 from __future__ import annotations
 
 import os
+import shutil
 import socket
 import time
 from pathlib import Path
@@ -79,6 +81,26 @@ class Progress(tune.Callback):
               flush=True)
 
 
+class StageCheckpoints(tune.Callback):
+    """Copies the checkpoint taken at a stage's end to `<run>/stages/<number>-<stage name>`, out of
+    reach of Tune's rotation (it keeps the latest three): the policy after each phase of the
+    curriculum, to evaluate or to branch from."""
+
+    def __init__(self):
+        self._ended: dict[str, str] = {}
+
+    def on_trial_result(self, iteration, trials, trial, result, **info):
+        ended = result.get("curriculum", {}).get("ended_stage")
+        if ended:
+            self._ended[trial.trial_id] = ended
+
+    def on_checkpoint(self, iteration, trials, trial, checkpoint, **info):
+        ended = self._ended.pop(trial.trial_id, None)
+        if ended:
+            run_dir = Path(checkpoint.path).parents[1]  # <run>/<trial>/checkpoint_*
+            shutil.copytree(checkpoint.path, run_dir / "stages" / ended, dirs_exist_ok=True)
+
+
 def train(curriculum: Curriculum, out: Path, *, resume: bool = False,
           pi_weights: str | Path | None = None, num_env_runners: int = 0, seed: int = 0):
     """Run (or resume) `curriculum` into the run directory `out`; Ray must be initialised."""
@@ -106,7 +128,7 @@ def train(curriculum: Curriculum, out: Path, *, resume: bool = False,
                 checkpoint_config=tune.CheckpointConfig(
                     checkpoint_frequency=curriculum.ppo["checkpoint_every"],
                     checkpoint_at_end=True, num_to_keep=3),
-                callbacks=[Progress()],
+                callbacks=[Progress(), StageCheckpoints()],
                 verbose=0,
             ),
         )

@@ -1,4 +1,5 @@
-"""`python -m rllib_pommer.train --resume` continues a SIGKILLed run with stage and counters."""
+"""`python -m rllib_pommer.train --resume` continues a SIGKILLed run with stage and counters, and
+keeps the checkpoint at the warm-up's end."""
 
 from __future__ import annotations
 
@@ -9,6 +10,11 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+
+import torch
+
+from rllib_pommer.learned import load_policy_net
+from rllib_pommer.rl.checkpoint_policy import load_checkpoint_net
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -54,3 +60,7 @@ def test_resume_after_sigkill(tmp_path, pi_weights):
     final = resumed[-1]
     assert final["curriculum"]["episodes"] >= final["curriculum"]["total_episodes"]
     assert final["curriculum"]["stage_name"] == "static"
+    # The warm-up's end was kept apart from the rotating checkpoints, with pi as it started.
+    warmup_end = load_checkpoint_net(out / "stages" / "1-warmup").state_dict()
+    start = load_policy_net(pi_weights).state_dict()
+    assert all(torch.equal(warmup_end[key], start[key]) for key in start)
