@@ -84,12 +84,8 @@ class Curriculum:
     def stage_at(self, episodes: int) -> int:
         """Index of the stage in force after `episodes` lifetime episodes (the last one at the
         end, so a run that overshoots keeps its final setting)."""
-        end = 0
-        for index, stage in enumerate(self.stages):
-            end += stage.episodes
-            if episodes < end:
-                return index
-        return len(self.stages) - 1
+        last = len(self.stages) - 1
+        return next((i for i in range(last) if episodes < self.stage_end(i)), last)
 
     def stage_end(self, index: int) -> int:
         """The lifetime episode count at which stage `index` ends."""
