@@ -58,17 +58,17 @@ class Progress(tune.Callback):
     stage and in the run."""
 
     def __init__(self):
-        self._start = time.monotonic()
-        self._first_episodes: int | None = None
+        self._first: tuple[float, int] | None = None  # (time, episodes) of the first result seen
 
     def on_trial_result(self, iteration, trials, trial, result, **info):
         stage = result.get("curriculum", {})
         runners = result.get("env_runners", {})
         episodes, total = stage.get("episodes", 0), stage.get("total_episodes", 0)
-        if self._first_episodes is None:
-            self._first_episodes = episodes
-        elapsed = time.monotonic() - self._start
-        rate = (episodes - self._first_episodes) / elapsed if elapsed > 0 else 0.0
+        now = time.monotonic()
+        if self._first is None:  # measure from here: start-up and restore are not training
+            self._first = (now, episodes)
+        elapsed = now - self._first[0]
+        rate = (episodes - self._first[1]) / elapsed if elapsed > 0 else 0.0
         stage_end = stage.get("stage_end_episodes", total)
         steps_per_s = runners.get("num_env_steps_sampled", 0) / max(result["time_this_iter_s"],
                                                                        1e-9)
