@@ -1,7 +1,11 @@
 """Training curves from Tune trial directories, for the paper's Fig. 3.
 
-A trial directory holds `progress.csv` (read first) or `result.json` (one JSON result per line,
-flattened with "/" as Tune does), one row per training iteration. Columns used:
+A trial directory holds `result.json` (one JSON result per line, flattened with "/" as Tune
+does; read first) or `progress.csv`, one row per training iteration. result.json comes first
+because Tune's CSV appends a resumed run's rows in the new results' column order under the old
+header when the set of keys changed, which scrambles the columns. A resumed trial repeats the
+iterations after its checkpoint: the rows of the restored run replace the ones it discarded.
+Columns used:
 
 - the mean episode return: the first present of `RETURN_COLUMNS` (required);
 - the episode count: `env_runners/num_episodes_lifetime` (cumulative) or, failing that,
@@ -31,7 +35,7 @@ RETURN_COLUMNS = ("env_runners/module_episode_returns_mean/learner",
 LIFETIME_COLUMNS = ("env_runners/num_episodes_lifetime", "num_episodes_lifetime")
 PER_ITERATION_COLUMNS = ("env_runners/num_episodes", "episodes_this_iter")
 STAGE_COLUMNS = ("curriculum/stage_name", "curriculum_stage", "curriculum_kind")
-TRIAL_FILES = ("progress.csv", "result.json")
+TRIAL_FILES = ("result.json", "progress.csv")
 WINDOW = 1000
 
 
@@ -73,11 +77,27 @@ def _flatten(result: dict, prefix: str = "") -> dict:
 
 
 def read_rows(trial: Path) -> list[dict]:
-    if (trial / "progress.csv").is_file():
+    if (trial / "result.json").is_file():
+        with open(trial / "result.json") as f:
+            rows = [_flatten(json.loads(line)) for line in f if line.strip()]
+    else:
         with open(trial / "progress.csv", newline="") as f:
-            return list(csv.DictReader(f))
-    with open(trial / "result.json") as f:
-        return [_flatten(json.loads(line)) for line in f if line.strip()]
+            rows = list(csv.DictReader(f))
+    return without_discarded(rows)
+
+
+def without_discarded(rows: list[dict]) -> list[dict]:
+    """The rows in training order after restores: an iteration number that does not grow starts
+    a restored run, whose rows replace those from that iteration on."""
+    kept: list[dict] = []
+    last = -math.inf
+    for row in rows:
+        iteration = _number(row.get("training_iteration"))
+        if iteration <= last:
+            kept = [k for k in kept if not _number(k.get("training_iteration")) >= iteration]
+        last = iteration if math.isfinite(iteration) else last
+        kept.append(row)
+    return kept
 
 
 def _number(value) -> float:

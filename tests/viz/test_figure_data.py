@@ -106,3 +106,19 @@ def test_paper_numbers_are_the_tex_tables():
                                             else None for k in range(0, 12, 3)]
         expected = {vs: list(cells.values()) for vs, cells in PAPER_TABLES[team][1].items()}
         assert rows == expected
+
+
+def test_a_restored_runs_rows_replace_the_discarded_ones(tmp_path):
+    def row(iteration, lifetime, ret):
+        return {"training_iteration": iteration, "curriculum": {"stage_name": "warmup"},
+                "env_runners": {"num_episodes_lifetime": lifetime, "episode_return_mean": ret}}
+
+    # Checkpoint after iteration 2; iterations 3-4 ran, were lost, and were run again.
+    rows = [row(1, 10, 0.0), row(2, 20, 0.0), row(3, 30, 9.0), row(4, 40, 9.0),
+            row(3, 30, 1.0), row(4, 40, 1.0)]
+    (tmp_path / "result.json").write_text("".join(json.dumps(r) + "\n" for r in rows))
+    # A CSV scrambled by the resume is not read when result.json is there.
+    (tmp_path / "progress.csv").write_text("training_iteration,x\n1,2\n3,garbage,more\n")
+    curve = training_curve(tmp_path, window=20)
+    np.testing.assert_array_equal(curve.episodes, [10, 20, 30, 40])
+    np.testing.assert_allclose(curve.returns, [0.0, 0.0, 0.5, 1.0])
