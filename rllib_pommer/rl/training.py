@@ -60,6 +60,11 @@ class Progress(tune.Callback):
     def __init__(self):
         self._first: tuple[float, int] | None = None  # (time, episodes) of the first result seen
 
+    def __setstate__(self, state):
+        # Tune pickles its callbacks with the experiment; a resumed run measures afresh, also
+        # when the pickle came from an older version of this class.
+        self.__init__()
+
     def on_trial_result(self, iteration, trials, trial, result, **info):
         stage = result.get("curriculum", {})
         runners = result.get("env_runners", {})
@@ -88,6 +93,9 @@ class StageCheckpoints(tune.Callback):
 
     def __init__(self):
         self._ended: dict[str, str] = {}
+
+    def __setstate__(self, state):
+        self.__init__()  # as Progress: nothing pending survives a restore
 
     def on_trial_result(self, iteration, trials, trial, result, **info):
         ended = result.get("curriculum", {}).get("ended_stage")

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import pickle
+
 from rllib_pommer.rl import training
 
 
@@ -25,3 +27,11 @@ def test_progress_line_and_eta_after_a_resume(monkeypatch, capsys):
     assert "400 env steps/s" in second
     # 1,800 episodes left in the stage at 2/s = 15 min; 91,800 in the run = 12 h 45 min.
     assert second.endswith("ETA stage 15m00s, run 12h45m")
+
+
+def test_a_progress_pickled_by_an_older_version_resumes(capsys):
+    old = training.Progress.__new__(training.Progress)
+    old.__dict__.update({"_start": 5.0, "_first_episodes": 1134})  # the fields it once had
+    restored = pickle.loads(pickle.dumps(old))
+    restored.on_trial_result(1, [], None, _result(53, 1_200))
+    assert "episodes 1200/100000" in capsys.readouterr().out
