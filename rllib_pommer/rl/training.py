@@ -53,17 +53,21 @@ def _eta(episodes_left: int, episodes_per_s: float) -> str:
     return _duration(max(episodes_left, 0) / episodes_per_s) if episodes_per_s > 0 else "?"
 
 
-class Progress(tune.Callback):
+class FreshOnRestore(tune.Callback):
+    """Tune pickles its callbacks with the experiment and unpickles them on `--resume`; these
+    keep only per-process bookkeeping, so they start afresh (also from an older version's pickle,
+    whose fields may differ)."""
+
+    def __setstate__(self, state):
+        self.__init__()
+
+
+class Progress(FreshOnRestore):
     """One line per iteration: stage, episodes, win/loss/tie, env steps/s and the time left in the
     stage and in the run."""
 
     def __init__(self):
         self._first: tuple[float, int] | None = None  # (time, episodes) of the first result seen
-
-    def __setstate__(self, state):
-        # Tune pickles its callbacks with the experiment; a resumed run measures afresh, also
-        # when the pickle came from an older version of this class.
-        self.__init__()
 
     def on_trial_result(self, iteration, trials, trial, result, **info):
         stage = result.get("curriculum", {})
@@ -86,16 +90,13 @@ class Progress(tune.Callback):
               flush=True)
 
 
-class StageCheckpoints(tune.Callback):
+class StageCheckpoints(FreshOnRestore):
     """Copies the checkpoint taken at a stage's end to `<run>/stages/<number>-<stage name>`, out of
     reach of Tune's rotation (it keeps the latest three): the policy after each phase of the
     curriculum, to evaluate or to branch from."""
 
     def __init__(self):
         self._ended: dict[str, str] = {}
-
-    def __setstate__(self, state):
-        self.__init__()  # as Progress: nothing pending survives a restore
 
     def on_trial_result(self, iteration, trials, trial, result, **info):
         ended = result.get("curriculum", {}).get("ended_stage")
