@@ -4,8 +4,9 @@ A trial directory holds `result.json` (one JSON result per line, flattened with 
 does; read first) or `progress.csv`, one row per training iteration. result.json comes first
 because Tune's CSV appends a resumed run's rows in the new results' column order under the old
 header when the set of keys changed, which scrambles the columns. A resumed trial repeats the
-iterations after its checkpoint: the rows of the restored run replace the ones it discarded.
-Columns used:
+iterations after its checkpoint: the rows of the restored run replace the ones it discarded. A
+line that is not JSON (a write cut short: a live run mid-line, or a run killed mid-write and then
+resumed) is skipped with a warning naming the file and line. Columns used:
 
 - the mean episode return: the first present of `RETURN_COLUMNS` (required);
 - the episode count: `env_runners/num_episodes_lifetime` (cumulative) or, failing that,
@@ -25,6 +26,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -76,10 +78,25 @@ def _flatten(result: dict, prefix: str = "") -> dict:
     return flat
 
 
+def _json_rows(path: Path) -> list[dict]:
+    rows, unreadable = [], []
+    with open(path) as f:
+        for number, line in enumerate(f, start=1):
+            if not line.strip():
+                continue
+            try:
+                rows.append(_flatten(json.loads(line)))
+            except json.JSONDecodeError:
+                unreadable.append(number)
+    if unreadable:
+        warnings.warn(f"{path}: skipped line(s) {unreadable}, not JSON (a write cut short)",
+                      stacklevel=3)
+    return rows
+
+
 def read_rows(trial: Path) -> list[dict]:
     if (trial / "result.json").is_file():
-        with open(trial / "result.json") as f:
-            rows = [_flatten(json.loads(line)) for line in f if line.strip()]
+        rows = _json_rows(trial / "result.json")
     else:
         with open(trial / "progress.csv", newline="") as f:
             rows = list(csv.DictReader(f))

@@ -122,3 +122,15 @@ def test_a_restored_runs_rows_replace_the_discarded_ones(tmp_path):
     curve = training_curve(tmp_path, window=20)
     np.testing.assert_array_equal(curve.episodes, [10, 20, 30, 40])
     np.testing.assert_allclose(curve.returns, [0.0, 0.0, 0.5, 1.0])
+
+
+def test_lines_cut_short_are_skipped_with_a_warning_naming_them(tmp_path):
+    def line(ret):
+        return json.dumps({"env_runners": {"episode_return_mean": ret, "num_episodes": 10}})
+
+    # A run killed mid-write and resumed leaves a torn line 2; a live run is mid-way on line 4.
+    (tmp_path / "result.json").write_text(
+        line(1) + "\n" + line(9)[:25] + line(3) + "\n" + line(5) + "\n" + line(7)[:30])
+    with pytest.warns(UserWarning, match=r"result.json: skipped line\(s\) \[2, 4\]"):
+        curve = training_curve(tmp_path)
+    np.testing.assert_allclose(curve.returns, [1.0, 3.0])
