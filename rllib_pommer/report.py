@@ -18,6 +18,7 @@ from __future__ import annotations
 import argparse
 import csv
 import sys
+from collections import Counter
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -34,8 +35,10 @@ from .viz.matches import ROW_KEYS, load_outcomes, rates_by_opponent
 from .viz.paper import PAPER_TABLES
 from .viz.render import render_game
 from .viz.tables import results_table
-from .viz.training import find_trials, training_curve
+from .viz.training import find_trials, training_curve, write_summary
 from .viz.viewer import write_viewer
+
+SUMMARIES = "runs"  # below the report's folder: one small trial folder per run of Fig. 3
 
 
 def kind_of(path: Path) -> str:
@@ -80,10 +83,17 @@ def _tables_and_fig4(records: list[Path], out: Path) -> Iterator[str]:
 
 
 def _fig3(trials: list[Path], out: Path) -> Iterator[str]:
-    plot_training([training_curve(trial) for trial in trials], out / "fig3_training.png")
+    curves = [training_curve(trial) for trial in trials]
+    plot_training(curves, out / "fig3_training.png")
+    named = Counter(curve.name for curve in curves)
+    for k, (trial, curve) in enumerate(zip(trials, curves, strict=True)):  # the figure's data
+        write_summary(trial, out / SUMMARIES / (
+            curve.name if named[curve.name] == 1 else f"{curve.name}_{k}"))
     yield "## Training reward (the paper's Fig. 3)"
     yield f"From {len(trials)} trial(s): " + ", ".join(f"`{t}`" for t in trials)
     yield "![Fig. 3](fig3_training.png)"
+    yield (f"Each run's curve and training figures per iteration are in `{SUMMARIES}/<run>/"
+           f"progress.csv` (a trial folder this report reads again).")
 
 
 def _fig5_and_game(replays: list[Path], out: Path) -> Iterator[str]:

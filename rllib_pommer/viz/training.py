@@ -19,6 +19,11 @@ Rows without a return (empty or NaN: no episode finished yet) are skipped. Each 
 taken as the mean of the episodes it counts, which turns iterations into a per-episode series; the
 curve is its rolling mean over the last 1000 episodes, restarted at each phase change so a phase's
 curve never mixes opponents.
+
+`write_summary` keeps a trial's curve columns and `SUMMARY_COLUMNS` in a small progress.csv (a
+few hundred bytes per iteration instead of a result.json's ~25 KB), itself a trial directory this
+module reads: the report writes one per run beside Fig. 3, so the figure and the figures quoted
+from a run can be redrawn after the run directory is gone.
 """
 
 from __future__ import annotations
@@ -38,6 +43,12 @@ LIFETIME_COLUMNS = ("env_runners/num_episodes_lifetime", "num_episodes_lifetime"
 PER_ITERATION_COLUMNS = ("env_runners/num_episodes", "episodes_this_iter")
 STAGE_COLUMNS = ("curriculum/stage_name", "curriculum_stage", "curriculum_kind")
 TRIAL_FILES = ("result.json", "progress.csv")
+# Kept by `write_summary` beside the columns the curve is drawn from (what our trainer logs).
+SUMMARY_COLUMNS = (
+    "training_iteration", "time_total_s", "env_runners/num_env_steps_sampled_lifetime",
+    "curriculum/pi_frozen", "env_runners/learner_win", "env_runners/learner_loss",
+    "env_runners/learner_tie", "env_runners/learner_override_share",
+    "env_runners/episode_len_mean", "learners/learner/vf_explained_var")
 WINDOW = 1000
 
 
@@ -101,6 +112,22 @@ def read_rows(trial: Path) -> list[dict]:
         with open(trial / "progress.csv", newline="") as f:
             rows = list(csv.DictReader(f))
     return without_discarded(rows)
+
+
+def write_summary(trial: Path, out: Path) -> Path:
+    """`out`/progress.csv: the trial's rows (restores resolved), only the columns the curve is
+    drawn from and those of `SUMMARY_COLUMNS` it has."""
+    rows = read_rows(trial)
+    curve = [_column(rows, names) for names in (RETURN_COLUMNS, LIFETIME_COLUMNS,
+                                                PER_ITERATION_COLUMNS, STAGE_COLUMNS)]
+    columns = list(dict.fromkeys(c for c in [*SUMMARY_COLUMNS, *curve]
+                                 if c and any(c in row for row in rows)))
+    out.mkdir(parents=True, exist_ok=True)
+    with open(out / "progress.csv", "w", newline="") as f:
+        writer = csv.DictWriter(f, columns, extrasaction="ignore")
+        writer.writeheader()
+        writer.writerows(rows)
+    return out
 
 
 def without_discarded(rows: list[dict]) -> list[dict]:

@@ -11,7 +11,7 @@ import pytest
 from rllib_pommer.viz.behaviour import heatmaps_by_opponent, to_top_left
 from rllib_pommer.viz.matches import Match, load_outcomes, match_of
 from rllib_pommer.viz.paper import PAPER_OPPONENTS, PAPER_TABLES
-from rllib_pommer.viz.training import rolling_mean, training_curve
+from rllib_pommer.viz.training import rolling_mean, training_curve, write_summary
 
 from ..conftest import REPO_ROOT
 
@@ -134,3 +134,29 @@ def test_lines_cut_short_are_skipped_with_a_warning_naming_them(tmp_path):
     with pytest.warns(UserWarning, match=r"result.json: skipped line\(s\) \[2, 4\]"):
         curve = training_curve(tmp_path)
     np.testing.assert_allclose(curve.returns, [1.0, 3.0])
+
+
+def test_a_summary_keeps_the_curve_and_the_training_figures_only(tmp_path):
+    def row(iteration, ret, win):
+        return {"training_iteration": iteration, "curriculum": {"stage_name": "warmup"},
+                "env_runners": {"num_episodes_lifetime": 10 * iteration,
+                                "module_episode_returns_mean": {"learner": ret},
+                                "learner_win": win, "timers": {"sample": 1.5}},
+                "config": {"lr": 1e-4}}
+
+    rows = [row(1, -1.0, 0.0), row(2, 0.5, 0.25), row(1, 0.0, 0.5), row(2, 1.0, 1.0)]
+    trial = tmp_path / "PPO_pommerman_team_00000"
+    trial.mkdir()
+    (trial / "result.json").write_text("".join(json.dumps(r) + "\n" for r in rows))
+    summary = write_summary(trial, tmp_path / "summary" / "quick")
+    header, *lines = (summary / "progress.csv").read_text().splitlines()
+    assert header.split(",") == [
+        "training_iteration", "env_runners/learner_win",
+        "env_runners/module_episode_returns_mean/learner", "env_runners/num_episodes_lifetime",
+        "curriculum/stage_name"]
+    assert len(lines) == 2  # the restored run's rows replaced the discarded ones
+    again, first = training_curve(summary, window=20), training_curve(trial, window=20)
+    np.testing.assert_allclose(again.returns, first.returns)
+    np.testing.assert_array_equal(again.episodes, first.episodes)
+    assert again.stages == first.stages == ["warmup", "warmup"]
+    assert again.name == "quick"

@@ -60,6 +60,12 @@ def test_report_from_records_trials_and_replays(tmp_path, replay_file, capsys):
         assert_picture(out / picture)
     assert "fig4_filters_simple.png" not in report  # no filtered variant to compare with
     assert (out / "game.html").stat().st_size > 10_000
+    # Fig. 3's data, a trial folder the report reads again: the same figure from the summary.
+    summary = out / "runs" / "runs" / "progress.csv"
+    assert summary.read_text().startswith("env_runners/episode_return_mean,")
+    again = tmp_path / "again"
+    assert main([str(out / "runs"), "--out", str(again)]) == 0
+    assert_picture(again / "fig3_training.png")
 
 
 def test_report_says_which_inputs_it_could_not_read(tmp_path, capsys):
