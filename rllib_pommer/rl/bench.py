@@ -23,6 +23,7 @@ from ..network import PommerNet
 from .config import build_config
 from .curriculum import load_curriculum
 from .env import ENV_NAME, PommeEnv
+from .training import init_ray
 
 ZERO_COST_ENV = "pommerman_team_zero_cost"
 
@@ -69,11 +70,9 @@ def _steps_per_second(config, iterations: int) -> tuple[float, float]:
 
 def bench_train(iterations: int = 3, curriculum: str = "quick") -> dict:
     """Env steps/s of PPO on the real and the zero-cost env, and their ratio."""
-    torch.set_num_threads(1)
-    torch.set_flush_denormal(True)
     started_ray = not ray.is_initialized()
     if started_ray:
-        ray.init(num_cpus=2, include_dashboard=False)
+        init_ray(None)
     try:
         with tempfile.TemporaryDirectory() as tmp:
             weights = Path(tmp) / "pi.pt"

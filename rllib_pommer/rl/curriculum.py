@@ -1,10 +1,11 @@
 """Curricula as data: TOML files in the top-level `curriculum/` folder, checked on load.
 
-A file names the run, optionally the imitation weights pi starts from, PPO options, defaults for
-every stage, and the stages in order::
+A file names the run, optionally the imitation weights pi starts from (default: the shipped
+`policies/imitation/pi.pt`, wherever the file lies), PPO options, defaults for every stage, and
+the stages in order::
 
     name = "paper"
-    pi_weights = "../policies/imitation/pi.pt"   # relative to this file
+    pi_weights = "../policies/imitation/pi.pt"   # optional; relative to this file
     [ppo]
     train_batch_size = 4000
     [defaults]
@@ -27,7 +28,7 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
-from ..agents.registry import policy_names, resolve_policy
+from ..agents.registry import policies_dir, policy_names, resolve_policy
 from .env import REWARD_MODES
 
 if sys.version_info >= (3, 11):
@@ -36,7 +37,6 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 CURRICULUM_DIR = Path(__file__).resolve().parents[2] / "curriculum"
-DEFAULT_PI_WEIGHTS = "../policies/imitation/pi.pt"
 SCRIPTED_KINDS = ("static", "random", "simple", "simple_nobomb", "smart_random", "suicide")
 NET_KINDS = ("learned", "rllib_checkpoint")
 # PPO options a file may set (the paper fixes entropy 0, clip 0.01 and minibatch 128).
@@ -175,7 +175,8 @@ def load_curriculum(name_or_path: str | Path) -> Curriculum:
         name=data.get("name", path.stem),
         path=path,
         stages=stages,
-        pi_weights=(path.parent / data.get("pi_weights", DEFAULT_PI_WEIGHTS)).resolve(),
+        pi_weights=(path.parent / data["pi_weights"] if "pi_weights" in data
+                    else policies_dir() / "imitation" / "pi.pt").resolve(),
         max_steps=int(data.get("max_steps", 800)),
         ppo={**PPO_OPTIONS, **ppo},
     )

@@ -28,11 +28,13 @@ STOP_KEY = "env_runners/num_episodes_lifetime"
 
 
 def init_ray(address: str | None) -> None:
-    """Ray on this machine (at most 2 CPUs), or on an existing cluster at `address`."""
+    """A Ray instance of our own on this machine (at most 2 CPUs), or an existing cluster at
+    `address`. Our own, even where `ray start` left a cluster running here: a plain `ray.init()`
+    would join that one (and refuse `num_cpus`)."""
     torch.set_num_threads(1)
     torch.set_flush_denormal(True)
     if address is None:
-        ray.init(num_cpus=2, include_dashboard=False)
+        ray.init(address="local", num_cpus=2, include_dashboard=False)
         return
     if address != "auto":
         host, _, port = address.removeprefix("ray://").rpartition(":")
@@ -41,7 +43,15 @@ def init_ray(address: str | None) -> None:
         except (OSError, ValueError) as exc:
             raise ValueError(f"Ray address {address!r} is unreachable ({exc}); expected "
                              f"HOST:PORT of a running cluster's head, or 'auto'") from None
-    ray.init(address=address)
+    try:
+        ray.init(address=address)
+    except ConnectionError as exc:
+        if "AuthToken" not in f"{exc} {exc.__cause__}":
+            raise
+        raise ValueError(
+            f"the Ray cluster at {address!r} wants a token (`ray start` turns token "
+            f"authentication on): run with RAY_AUTH_MODE=token and the cluster's token in "
+            f"~/.ray/auth_token, RAY_AUTH_TOKEN or RAY_AUTH_TOKEN_PATH") from None
 
 
 def _duration(seconds: float) -> str:

@@ -14,7 +14,7 @@ def ray_session():
 
     torch.set_num_threads(1)
     torch.set_flush_denormal(True)
-    ray.init(num_cpus=2, include_dashboard=False)
+    ray.init(address="local", num_cpus=2, include_dashboard=False)
     yield
     ray.shutdown()
 

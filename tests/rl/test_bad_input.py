@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import socket
+
 import pytest
 
 from rllib_pommer.rl.config import build_config
@@ -48,3 +50,21 @@ def test_missing_imitation_weights(tmp_path):
 def test_unreachable_ray_address():
     with pytest.raises(ValueError, match="unreachable"):
         init_ray("127.0.0.1:1")
+
+
+def test_a_cluster_that_wants_a_token_says_how_to_give_it(monkeypatch):
+    """What Ray 2.60 raises when `ray start` turned token authentication on and we have none."""
+    import ray
+
+    def refuse(**kwargs):
+        try:
+            raise RuntimeError("Failed to connect to GCS. ... ray.exceptions.AuthenticationError: "
+                               "RPC error: InvalidAuthToken: Authentication token is missing")
+        except RuntimeError as cause:
+            raise ConnectionError("Failed to connect to Ray cluster at 127.0.0.1:6379") from cause
+
+    with socket.create_server(("127.0.0.1", 0)) as head:  # a port that answers
+        monkeypatch.setattr(ray, "init", refuse)
+        with pytest.raises(ValueError, match="RAY_AUTH_MODE=token") as info:
+            init_ray(f"127.0.0.1:{head.getsockname()[1]}")
+    assert "wants a token" in str(info.value)

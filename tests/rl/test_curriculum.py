@@ -6,6 +6,8 @@ import pytest
 
 from rllib_pommer.rl.curriculum import curriculum_names, load_curriculum
 
+from ..conftest import REPO_ROOT
+
 
 @pytest.mark.parametrize("name", curriculum_names())
 def test_every_shipped_curriculum_loads(name):
@@ -36,3 +38,12 @@ def test_variants_share_the_value_warmup():
         first = load_curriculum(name).stages[0]
         assert (first.opponent, first.episodes, first.freeze_pi) == ("simple", 10_000, True)
         assert load_curriculum(name).total_episodes == 100_000
+
+
+def test_a_file_anywhere_starts_from_the_shipped_weights_unless_it_names_its_own(tmp_path):
+    stage = '[[stage]]\nname = "a"\nopponent = "static"\nepisodes = 5\n'
+    (tmp_path / "mine.toml").write_text(stage)
+    assert load_curriculum(tmp_path / "mine.toml").pi_weights == \
+        load_curriculum("quick").pi_weights == (REPO_ROOT / "policies/imitation/pi.pt").resolve()
+    (tmp_path / "own.toml").write_text('pi_weights = "w/pi.pt"\n' + stage)
+    assert load_curriculum(tmp_path / "own.toml").pi_weights == (tmp_path / "w/pi.pt").resolve()
