@@ -34,8 +34,14 @@ from .viz.frames import load_game
 from .viz.matches import ROW_KEYS, load_outcomes, rates_by_opponent
 from .viz.paper import PAPER_TABLES
 from .viz.render import render_game
-from .viz.tables import results_table
-from .viz.training import find_trials, training_curve, write_summary
+from .viz.tables import results_table, training_table
+from .viz.training import (
+    find_trials,
+    read_trial,
+    stage_figures,
+    training_curve,
+    write_summary,
+)
 from .viz.viewer import write_viewer
 
 SUMMARIES = "runs"  # below the report's folder: one small trial folder per run of Fig. 3
@@ -82,16 +88,17 @@ def _tables_and_fig4(records: list[Path], out: Path) -> Iterator[str]:
             yield f"![Fig. 4 for {team}]({name})"
 
 
-def _fig3(trials: list[Path], out: Path) -> Iterator[str]:
-    curves = [training_curve(trial) for trial in trials]
-    plot_training(curves, out / "fig3_training.png")
-    named = Counter(curve.name for curve in curves)
-    for k, (trial, curve) in enumerate(zip(trials, curves, strict=True)):  # the figure's data
+def _fig3(paths: list[Path], out: Path) -> Iterator[str]:
+    trials = [read_trial(path) for path in paths]
+    plot_training([training_curve(trial) for trial in trials], out / "fig3_training.png")
+    named = Counter(trial.name for trial in trials)
+    for k, trial in enumerate(trials):  # the figure's data
         write_summary(trial, out / SUMMARIES / (
-            curve.name if named[curve.name] == 1 else f"{curve.name}_{k}"))
+            trial.name if named[trial.name] == 1 else f"{trial.name}_{k}"))
     yield "## Training reward (the paper's Fig. 3)"
-    yield f"From {len(trials)} trial(s): " + ", ".join(f"`{t}`" for t in trials)
+    yield f"From {len(paths)} trial(s): " + ", ".join(f"`{path}`" for path in paths)
     yield "![Fig. 3](fig3_training.png)"
+    yield training_table([f for trial in trials for f in stage_figures(trial)])
     yield (f"Each run's curve and training figures per iteration are in `{SUMMARIES}/<run>/"
            f"progress.csv` (a trial folder this report reads again).")
 

@@ -8,6 +8,10 @@ in `algorithm.config` (so checkpoints carry it), reward mode and filter probabil
 and pi's freeze on every learner (requires_grad is not checkpointed). A restarted env runner or a
 restored run therefore picks up the right stage by itself.
 
+Each result names the stage in force from now on (`curriculum/stage`, `stage_name`) and the one
+the iteration sampled and trained in (`iteration_stage_name`); they differ on the iteration that
+ends a stage.
+
 The iteration that ends a stage asks Tune for a checkpoint (`should_checkpoint`) and names the
 stage (`curriculum/ended_stage`), so the state at every stage's end is saved (training.py keeps
 it apart from Tune's rotation).
@@ -92,8 +96,9 @@ class CurriculumCallback(RLlibCallback):
         if ended:
             result[SHOULD_CHECKPOINT] = True  # Tune saves the state at the stage's end
         result["curriculum"] = {
-            "stage": index,
+            "stage": index,  # in force from now on
             "stage_name": self.curriculum.stages[index].name,
+            "iteration_stage_name": self.curriculum.stages[before].name,  # this one sampled in
             "episodes": episodes,
             "stage_end_episodes": self.curriculum.stage_end(index),
             "total_episodes": self.curriculum.total_episodes,

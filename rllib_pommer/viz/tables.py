@@ -1,10 +1,14 @@
 """Win/loss/tie tables in the paper's layout (Tables 2 and 3): rows are opponents, columns the
-four variants, each cell win / loss / tie; ours over n games, the paper's (1000 games) below."""
+four variants, each cell win / loss / tie; ours over n games, the paper's (1000 games) below. And
+the training table: what each curriculum phase of each run cost and how the learner did."""
 
 from __future__ import annotations
 
+import math
+
 from .matches import VARIANTS, Match, Outcomes
 from .paper import PAPER_OPPONENTS, PAPER_TABLES
+from .training import StageFigures
 
 
 def _rates(cell) -> str:
@@ -27,4 +31,23 @@ def results_table(team: str, results: dict[Match, Outcomes]) -> str:
             paper = paper_rows.get(vs, {}).get(variant)
             cells.append(text + (f"<br>paper {_rates(paper)}" if paper else ""))
         lines.append(f"| {PAPER_OPPONENTS.get(vs, vs)} (`{vs}`) | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def _figure(value: float, digits: int = 3, unit: str = "") -> str:
+    return "—" if math.isnan(value) else f"{value:.{digits}f}{unit}"
+
+
+def training_table(figures: list[StageFigures]) -> str:
+    """One row per run and curriculum phase."""
+    lines = ["| run | stage | iterations | episodes | env steps | hours | env steps/s | "
+             "learner win / loss / tie | actions the filters overrode | value net explained "
+             "variance, first → last 10 iterations |", "|---" * 10 + "|"]
+    for f in figures:
+        rate = f.env_steps / f.seconds if f.seconds > 0 else math.nan
+        lines.append(
+            f"| {f.run} | {f.stage or '—'} | {f.iterations} | {f.episodes:,} | {f.env_steps:,} | "
+            f"{f.seconds / 3600:.2f} | {_figure(rate, 0)} | {_figure(f.win)} / "
+            f"{_figure(f.loss)} / {_figure(f.tie)} | {_figure(100 * f.override_share, 2, '%')} | "
+            f"{_figure(f.explained_variance[0], 2)} → {_figure(f.explained_variance[1], 2)} |")
     return "\n".join(lines)

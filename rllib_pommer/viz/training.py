@@ -11,9 +11,10 @@ resumed) is skipped with a warning naming the file and line. Columns used:
 - the mean episode return: the first present of `RETURN_COLUMNS` (required);
 - the episode count: `env_runners/num_episodes_lifetime` (cumulative) or, failing that,
   `env_runners/num_episodes` (per iteration) (one of them required);
-- the curriculum phase: `curriculum/stage_name` (what `python -m rllib_pommer.train` logs),
-  `curriculum_stage` or `curriculum_kind` (optional; without it the run
-  is one phase).
+- the curriculum phase: `curriculum/iteration_stage_name` (what `python -m rllib_pommer.train`
+  logs: the stage the iteration played in), `curriculum/stage_name` (older runs: the stage in
+  force after it, so the iteration that ends a stage counts in the next), `curriculum_stage` or
+  `curriculum_kind` (optional; without it the run is one phase).
 
 Rows without a return (empty or NaN: no episode finished yet) are skipped. Each row's mean is
 taken as the mean of the episodes it counts, which turns iterations into a per-episode series; the
@@ -41,7 +42,8 @@ RETURN_COLUMNS = ("env_runners/module_episode_returns_mean/learner",
                   "env_runners/episode_return_mean", "episode_reward_mean")
 LIFETIME_COLUMNS = ("env_runners/num_episodes_lifetime", "num_episodes_lifetime")
 PER_ITERATION_COLUMNS = ("env_runners/num_episodes", "episodes_this_iter")
-STAGE_COLUMNS = ("curriculum/stage_name", "curriculum_stage", "curriculum_kind")
+STAGE_COLUMNS = ("curriculum/iteration_stage_name", "curriculum/stage_name", "curriculum_stage",
+                 "curriculum_kind")
 TRIAL_FILES = ("result.json", "progress.csv")
 # Kept by `write_summary` beside the columns the curve is drawn from (what our trainer logs).
 SUMMARY_COLUMNS = (
@@ -114,13 +116,29 @@ def read_rows(trial: Path) -> list[dict]:
     return without_discarded(rows)
 
 
-def write_summary(trial: Path, out: Path) -> Path:
+@dataclass
+class Trial:
+    """A trial directory and its rows, read once (a long run's result.json is large)."""
+
+    path: Path
+    rows: list[dict]
+
+    @property
+    def name(self) -> str:
+        return run_name(self.path)
+
+
+def read_trial(trial: Trial | Path) -> Trial:
+    return trial if isinstance(trial, Trial) else Trial(Path(trial), read_rows(Path(trial)))
+
+
+def write_summary(trial: Trial | Path, out: Path) -> Path:
     """`out`/progress.csv: the trial's rows (restores resolved), only the columns the curve is
     drawn from and those of `SUMMARY_COLUMNS` it has."""
-    rows = read_rows(trial)
+    rows = read_trial(trial).rows
     curve = [_column(rows, names) for names in (RETURN_COLUMNS, LIFETIME_COLUMNS,
-                                                PER_ITERATION_COLUMNS, STAGE_COLUMNS)]
-    columns = list(dict.fromkeys(c for c in [*SUMMARY_COLUMNS, *curve]
+                                                PER_ITERATION_COLUMNS)]
+    columns = list(dict.fromkeys(c for c in [*SUMMARY_COLUMNS, *curve, *STAGE_COLUMNS]
                                  if c and any(c in row for row in rows)))
     out.mkdir(parents=True, exist_ok=True)
     with open(out / "progress.csv", "w", newline="") as f:
@@ -165,22 +183,38 @@ def rolling_mean(means: np.ndarray, counts: np.ndarray, window: int = WINDOW) ->
         return (total[ends] - total[starts]) / (ends - starts)
 
 
-def training_curve(trial: Path, window: int = WINDOW) -> TrainingCurve:
-    rows = read_rows(trial)
-    returns_col = _column(rows, RETURN_COLUMNS)
+def _values(rows: list[dict], column: str | None) -> np.ndarray:
+    return np.array([_number(row.get(column)) for row in rows]) if column else \
+        np.full(len(rows), np.nan)
+
+
+def _increments(rows: list[dict], column: str) -> np.ndarray:
+    """Per row, the growth of a lifetime counter since the row before."""
+    return np.diff(np.maximum.accumulate(np.nan_to_num(_values(rows, column))), prepend=0)
+
+
+def _episode_counts(trial: Trial) -> np.ndarray:
+    """Episodes finished in each row's iteration."""
+    rows = trial.rows
     lifetime_col = _column(rows, LIFETIME_COLUMNS)
-    per_iter_col = _column(rows, PER_ITERATION_COLUMNS)
-    if returns_col is None or (lifetime_col or per_iter_col) is None:
-        raise ValueError(f"{trial}: needs a return column (one of {list(RETURN_COLUMNS)}) and "
-                         f"an episode count ({LIFETIME_COLUMNS[0]} or {PER_ITERATION_COLUMNS[0]})")
-    stage_col = _column(rows, STAGE_COLUMNS)
-    means = np.array([_number(row.get(returns_col)) for row in rows])
     if lifetime_col:
-        lifetime = np.nan_to_num(np.array([_number(row.get(lifetime_col)) for row in rows]))
-        counts = np.diff(np.maximum.accumulate(lifetime), prepend=0)
-    else:
-        counts = np.nan_to_num(np.array([_number(row.get(per_iter_col)) for row in rows]))
-    stages = [str(row.get(stage_col, "")) if stage_col else "" for row in rows]
+        return _increments(rows, lifetime_col)
+    per_iter_col = _column(rows, PER_ITERATION_COLUMNS)
+    if per_iter_col is None:
+        raise ValueError(f"{trial.path}: needs an episode count ({LIFETIME_COLUMNS[0]} or "
+                         f"{PER_ITERATION_COLUMNS[0]})")
+    return np.nan_to_num(_values(rows, per_iter_col))
+
+
+def training_curve(trial: Trial | Path, window: int = WINDOW) -> TrainingCurve:
+    trial = read_trial(trial)
+    rows = trial.rows
+    returns_col = _column(rows, RETURN_COLUMNS)
+    if returns_col is None:
+        raise ValueError(f"{trial.path}: needs a return column (one of {list(RETURN_COLUMNS)})")
+    means = _values(rows, returns_col)
+    counts = _episode_counts(trial)
+    stages = [_stage_of(row) for row in rows]
     known = np.isfinite(means)
     episodes = np.cumsum(counts)[known]
     means, counts = means[known], counts[known].astype(np.int64)
@@ -188,7 +222,63 @@ def training_curve(trial: Path, window: int = WINDOW) -> TrainingCurve:
     curve = np.full(len(means), np.nan)
     for start, end, _ in phases(stages):
         curve[start:end] = rolling_mean(means[start:end], counts[start:end], window)
-    return TrainingCurve(run_name(trial), episodes, curve, stages)
+    return TrainingCurve(trial.name, episodes, curve, stages)
+
+
+@dataclass
+class StageFigures:
+    """One curriculum phase of a run, from its iterations' rows. Outcome rates and the override
+    share are the episode-weighted means of the logged 100-episode means (NaN where not logged);
+    explained variance is the value network's, mean of the phase's first and last 10 rows."""
+
+    run: str
+    stage: str
+    iterations: int
+    episodes: int
+    env_steps: int
+    seconds: float
+    win: float
+    loss: float
+    tie: float
+    override_share: float
+    explained_variance: tuple[float, float]
+
+
+def _weighted_mean(values: np.ndarray, weights: np.ndarray) -> float:
+    known = np.isfinite(values) & (weights > 0)
+    return float(np.average(values[known], weights=weights[known])) if known.any() else math.nan
+
+
+def _mean(values: np.ndarray) -> float:
+    known = values[np.isfinite(values)]
+    return float(known.mean()) if known.size else math.nan
+
+
+def stage_figures(trial: Trial | Path) -> list[StageFigures]:
+    trial = read_trial(trial)
+    rows = trial.rows
+    counts = _episode_counts(trial)
+    steps = _increments(rows, "env_runners/num_env_steps_sampled_lifetime")
+    seconds = _increments(rows, "time_total_s")
+    runner = {name: _values(rows, f"env_runners/learner_{name}")
+              for name in ("win", "loss", "tie", "override_share")}
+    variance = _values(rows, "learners/learner/vf_explained_var")
+    figures = []
+    for start, end, stage in phases([_stage_of(row) for row in rows]):
+        part = slice(start, end)
+        rates = {name: _weighted_mean(values[part], counts[part])
+                 for name, values in runner.items()}
+        figures.append(StageFigures(
+            trial.name, stage, end - start, int(counts[part].sum()),
+            int(steps[part].sum()), float(seconds[part].sum()), **rates,
+            explained_variance=(_mean(variance[part][:10]), _mean(variance[part][-10:]))))
+    return figures
+
+
+def _stage_of(row: dict) -> str:
+    """The row's phase from the first of `STAGE_COLUMNS` it has (a run resumed by a newer version
+    has the newer column from then on only)."""
+    return next((str(row[c]) for c in STAGE_COLUMNS if row.get(c) not in (None, "")), "")
 
 
 def phases(stages: list[str]) -> list[tuple[int, int, str]]:

@@ -70,6 +70,8 @@ def test_stage_boundary_and_warmup_freeze(smoke):
     for it in iterations:
         assert it["vf_changed"]
         assert it["pi_changed"] == (it["stage"] == 1), "pi must move only after the warm-up"
+        played = it["result"]["curriculum"]["iteration_stage_name"]
+        assert played == smoke["curriculum"].stages[it["stage"]].name
     last = iterations[-1]["result"]["env_runners"]
     assert {"learner_win", "learner_loss", "learner_tie", "learner_return"} <= set(last)
     shares = [it["result"]["env_runners"].get("learner_override_share", 0) for it in iterations]

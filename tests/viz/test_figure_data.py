@@ -11,7 +11,8 @@ import pytest
 from rllib_pommer.viz.behaviour import heatmaps_by_opponent, to_top_left
 from rllib_pommer.viz.matches import Match, load_outcomes, match_of
 from rllib_pommer.viz.paper import PAPER_OPPONENTS, PAPER_TABLES
-from rllib_pommer.viz.training import rolling_mean, training_curve, write_summary
+from rllib_pommer.viz.tables import training_table
+from rllib_pommer.viz.training import rolling_mean, stage_figures, training_curve, write_summary
 
 from ..conftest import REPO_ROOT
 
@@ -160,3 +161,47 @@ def test_a_summary_keeps_the_curve_and_the_training_figures_only(tmp_path):
     np.testing.assert_array_equal(again.episodes, first.episodes)
     assert again.stages == first.stages == ["warmup", "warmup"]
     assert again.name == "quick"
+
+
+def test_an_iteration_counts_in_the_stage_it_played_also_across_versions(tmp_path):
+    def row(iteration, **curriculum):
+        return {"training_iteration": iteration, "curriculum": curriculum,
+                "env_runners": {"num_episodes_lifetime": 10 * iteration,
+                                "episode_return_mean": 0.0}}
+
+    # An older version logged only the stage in force after the iteration; a newer one resumed
+    # the run after iteration 2 and logs the stage each iteration played in.
+    rows = [row(1, stage_name="warmup"), row(2, stage_name="warmup"),
+            row(3, stage_name="static", iteration_stage_name="warmup"),
+            row(4, stage_name="static", iteration_stage_name="static")]
+    (tmp_path / "result.json").write_text("".join(json.dumps(r) + "\n" for r in rows))
+    assert training_curve(tmp_path).stages == ["warmup", "warmup", "warmup", "static"]
+    summary = write_summary(tmp_path, tmp_path / "summary")
+    assert training_curve(summary).stages == ["warmup", "warmup", "warmup", "static"]
+
+
+def test_stage_figures_add_up_each_phase_and_weight_rates_by_episodes(tmp_path):
+    def row(iteration, stage, episodes, win, variance):
+        return {"training_iteration": iteration, "time_total_s": 60.0 * iteration,
+                "curriculum": {"iteration_stage_name": stage},
+                "env_runners": {"num_episodes_lifetime": episodes,
+                                "num_env_steps_sampled_lifetime": 1000 * iteration,
+                                "episode_return_mean": 0.0, "learner_win": win,
+                                "learner_loss": 1 - win, "learner_tie": 0.0},
+                "learners": {"learner": {"vf_explained_var": variance}}}
+
+    rows = [row(1, "warmup", 10, 0.0, 0.1), row(2, "warmup", 40, 1.0, 0.3),
+            row(3, "static", 50, 0.5, 0.5)]
+    trial = tmp_path / "PPO_x"
+    trial.mkdir()
+    (trial / "result.json").write_text("".join(json.dumps(r) + "\n" for r in rows))
+    warmup, static = stage_figures(trial)
+    assert (warmup.stage, warmup.iterations, warmup.episodes, warmup.env_steps, warmup.seconds) \
+        == ("warmup", 2, 40, 2000, 120.0)
+    assert warmup.win == pytest.approx((10 * 0.0 + 30 * 1.0) / 40)
+    assert warmup.explained_variance == pytest.approx((0.2, 0.2))
+    assert (static.episodes, static.env_steps, static.win) == (10, 1000, 0.5)
+    assert np.isnan(static.override_share)  # not logged
+    table = training_table([warmup, static])
+    assert "| tmp_path | warmup | 2 | 40 | 2,000 | 0.03 | 17 | 0.750 / 0.250 / 0.000 | — |" \
+        .replace("tmp_path", tmp_path.name) in table
