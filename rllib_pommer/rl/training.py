@@ -103,7 +103,7 @@ class Progress(FreshOnRestore):
 class StageCheckpoints(FreshOnRestore):
     """Copies the checkpoint taken at a stage's end to `<run>/stages/<number>-<stage name>`, out of
     reach of Tune's rotation (it keeps the latest three): the policy after each phase of the
-    curriculum, to evaluate or to branch from."""
+    curriculum, to evaluate or to put in a league (policy kind rllib_checkpoint)."""
 
     def __init__(self):
         self._ended: dict[str, str] = {}
