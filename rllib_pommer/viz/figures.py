@@ -44,7 +44,7 @@ def plot_training(curves: list[TrainingCurve], out: Path) -> None:
     ax.set_ylabel("episode return (1000-episode rolling mean)")
     ax.set_title("Fig. 3: training reward per curriculum phase")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="lower right")
+    ax.legend(fontsize=8, loc="best")
     fig.savefig(out, dpi=DPI)
 
 
