@@ -1,7 +1,8 @@
 """`python -m rllib_pommer.collect --games N --out DIR`: the expert dataset for imitation.
 
 Plays N 2v2 Team games of four SimpleAgents (as in Meisheri et al. 2019) on all cores and writes
-every living agent's raw observation and action, one row per (game, step, agent), to Parquet
+every living agent's raw observation and action (and with --label-draws K, SimpleAgent's action
+counts over K tie-breaking draws), one row per (game, step, agent), to Parquet
 shards DIR/shard-NNNNNN.parquet of --shard-games games each (schema: rllib_pommer/data/schema.py;
 read them with rllib_pommer.data.dataset.open_dataset). Same --seed, same dataset, whatever
 --workers. Re-running the same command resumes: finished shards are kept, the rest are played.
@@ -35,9 +36,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--workers", type=_positive, default=None,
                         help="processes (default: cores)")
     parser.add_argument("--shard-games", type=_positive, default=SHARD_GAMES)
+    parser.add_argument("--label-draws", type=int, default=0, metavar="K",
+                        help="also record SimpleAgent's action counts over K draws from the same "
+                             "memory per decision, the soft targets of imitation (0..255)")
     args = parser.parse_args(argv)
     try:
-        collection = Collection(args.out, args.games, args.seed, args.shard_games)
+        collection = Collection(args.out, args.games, args.seed, args.shard_games,
+                                args.label_draws)
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

@@ -18,9 +18,9 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from ..game.constants import Action, GameType, Item
+from ..game.constants import NUM_ACTIONS, Action, GameType, Item
 from ..game.observation import Observation
-from .rng import next_below, next_uniform, seed_states
+from .rng import next_below, next_u64, next_uniform, seed_states
 
 RECENT_LENGTH = 6
 SEARCH_DEPTH = 10
@@ -459,6 +459,73 @@ def _decide_batch(
     return actions
 
 
+@njit(cache=True)
+def _draw_seed(state, draw) -> np.uint64:
+    """The seed of label draw `draw` (0-based) for a stream now at `state`: splitmix64's output
+    for a state offset by the draw, so draws are independent of each other and of the stream."""
+    scratch = np.empty(1, np.uint64)
+    scratch[0] = state ^ (np.uint64(draw + 1) * np.uint64(0xD1B54A32D192ED03))
+    return next_u64(scratch, 0)
+
+
+@njit(cache=True)
+def _count_batch(
+    board, bomb_blast_strength, position, ammo, blast_strength, agent_id, game_type, active,
+    memory_arrays, draws
+):
+    recent, recent_len, prev_dir, rng = memory_arrays
+    counts = np.zeros((board.shape[0], NUM_ACTIONS), np.uint8)
+    one_recent = np.empty((1, RECENT_LENGTH, 2), np.int32)
+    one_len = np.empty(1, np.int32)
+    one_prev = np.empty(1, np.int32)
+    one_rng = np.empty(1, np.uint64)
+    for m in range(board.shape[0]):
+        if not active[m]:
+            continue
+        for draw in range(draws):
+            one_recent[0] = recent[m]
+            one_len[0] = recent_len[m]
+            one_prev[0] = prev_dir[m]
+            one_rng[0] = _draw_seed(rng[m], draw)
+            action = decide(board[m], bomb_blast_strength[m], position[m], ammo[m],
+                            blast_strength[m], agent_id[m], game_type[m],
+                            one_recent, one_len, one_prev, one_rng, 0)
+            counts[m, action] += 1
+    return counts
+
+
+def _kernel_args(obs: Observation, active: np.ndarray | None) -> tuple:
+    """The batched kernels' observation arguments, in the dtypes they are compiled for."""
+    if active is None:
+        active = np.ones(obs.board.shape[0], np.bool_)
+    return (
+        np.ascontiguousarray(obs.board, np.uint8),
+        np.ascontiguousarray(obs.bomb_blast_strength, np.uint8),
+        np.ascontiguousarray(obs.position, np.int32),
+        np.ascontiguousarray(obs.ammo, np.int32),
+        np.ascontiguousarray(obs.blast_strength, np.int32),
+        np.ascontiguousarray(obs.agent_id, np.int32),
+        np.ascontiguousarray(obs.game_type, np.int32),
+        np.ascontiguousarray(active, np.bool_),
+    )
+
+
+def simple_action_counts(
+    obs: Observation, memory: SimpleMemory, draws: int, active: np.ndarray | None = None
+) -> np.ndarray:
+    """How often SimpleAgent picks each action (M, 6) in `draws` decisions per row.
+
+    SimpleAgent breaks ties at random, so an observation and its memory define a distribution
+    over actions, of which one recorded action is a single sample. Each draw decides from a copy
+    of row m's memory with its own random stream (seeded from the row's stream state and the draw
+    index, so the counts are reproducible); `memory` is left untouched. The counts divided by
+    `draws` estimate the distribution; rows where `active` is False get zeros.
+    """
+    if not 0 < draws < 256:
+        raise ValueError(f"draws must be in 1..255 (counts are stored as uint8), got {draws}")
+    return _count_batch(*_kernel_args(obs, active), tuple(memory), draws)
+
+
 def simple_actions(
     obs: Observation, memory: SimpleMemory, active: np.ndarray | None = None
 ) -> np.ndarray:
@@ -468,19 +535,7 @@ def simple_actions(
     where `active` is False (dead agents, finished games) are skipped and get Stop, leaving their
     memory and random stream untouched.
     """
-    if active is None:
-        active = np.ones(obs.board.shape[0], np.bool_)
-    return _decide_batch(
-        np.ascontiguousarray(obs.board, np.uint8),
-        np.ascontiguousarray(obs.bomb_blast_strength, np.uint8),
-        np.ascontiguousarray(obs.position, np.int32),
-        np.ascontiguousarray(obs.ammo, np.int32),
-        np.ascontiguousarray(obs.blast_strength, np.int32),
-        np.ascontiguousarray(obs.agent_id, np.int32),
-        np.ascontiguousarray(obs.game_type, np.int32),
-        np.ascontiguousarray(active, np.bool_),
-        tuple(memory),
-    )
+    return _decide_batch(*_kernel_args(obs, active), tuple(memory))
 
 
 class SimpleAgent:

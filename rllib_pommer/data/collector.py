@@ -35,10 +35,14 @@ class ShardResult:
     bytes: int
 
 
-def plan_shards(games: int, seed: int, shard_games: int) -> list[ShardMeta]:
+def plan_shards(games: int, seed: int, shard_games: int,
+                label_draws: int = 0) -> list[ShardMeta]:
     if games <= 0 or shard_games <= 0:
         raise ValueError(f"games and shard_games must be positive, got {games}, {shard_games}")
-    return [ShardMeta(seed, first, min(first + shard_games, games), shard_games, TEAM.board_size)
+    if not 0 <= label_draws < 256:
+        raise ValueError(f"label_draws must be in 0..255, got {label_draws}")
+    return [ShardMeta(seed, first, min(first + shard_games, games), shard_games, TEAM.board_size,
+                      label_draws=label_draws)
             for first in range(0, games, shard_games)]
 
 
@@ -52,7 +56,8 @@ def _fsync_dir(directory: Path) -> None:
 
 def write_shard(out_dir: Path, index: int, meta: ShardMeta) -> ShardResult:
     """Play the shard's games and publish the shard atomically under its final name."""
-    samples = play_games(meta.seed, range(meta.first_game, meta.stop_game))
+    samples = play_games(meta.seed, range(meta.first_game, meta.stop_game),
+                         label_draws=meta.label_draws)
     table = encode(samples, meta)
     final = out_dir / shard_name(index)
     temp = out_dir / f".{final.stem}.{os.getpid()}.tmp"
@@ -93,9 +98,9 @@ class Collection:
     """One dataset's shards in `out_dir`: which are finished, and writing the missing ones."""
 
     def __init__(self, out_dir: Path, games: int, seed: int = 0,
-                 shard_games: int = SHARD_GAMES):
+                 shard_games: int = SHARD_GAMES, label_draws: int = 0):
         self.out_dir = out_dir
-        self.plan = plan_shards(games, seed, shard_games)
+        self.plan = plan_shards(games, seed, shard_games, label_draws)
         out_dir.mkdir(parents=True, exist_ok=True)
         self.results = finished_shards(out_dir, self.plan)
 

@@ -19,8 +19,8 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from ..game.observation import Observation
-from .schema import COLUMNS, SHARD_GLOB, decode, decode_columns, read_meta, to_observation
+from ..game.constants import NUM_ACTIONS
+from .schema import COLUMNS, COLUMNS_V1, SHARD_GLOB, Batch, decode, decode_columns, read_meta, to_batch
 
 SHUFFLE_ROW_GROUPS = 8
 
@@ -56,13 +56,19 @@ def _unit_hash(seed: int, game: int) -> float:
 
 
 def _read(path: Path, row_group: int | None = None, columns=COLUMNS) -> pa.Table:
-    """One row group (or the whole shard) of `columns`, or a ValueError naming the file."""
+    """One row group (or the whole shard) of `columns`, or a ValueError naming the file. A
+    schema-1 shard gets zero `action_counts`, so shards of both schemas concatenate."""
     try:
         shard = pq.ParquetFile(path, page_checksum_verification=True)
-        table = (shard.read(columns) if row_group is None
-                 else shard.read_row_group(row_group, columns))
+        old = "action_counts" not in shard.schema_arrow.names
+        wanted = [c for c in columns if c in COLUMNS_V1] if old else columns
+        table = (shard.read(wanted) if row_group is None
+                 else shard.read_row_group(row_group, wanted))
     except (OSError, pa.ArrowException) as exc:
         raise ValueError(f"{path}: unreadable shard ({exc})") from exc
+    if old and "action_counts" in columns:
+        zeros = pa.array([bytes(NUM_ACTIONS)] * table.num_rows, pa.binary(NUM_ACTIONS))
+        table = table.append_column("action_counts", zeros).select(list(columns))
     return table.replace_schema_metadata(None)
 
 
@@ -114,8 +120,9 @@ class Dataset:
         return table.filter(self._keeps(table)) if self._sides else table
 
     def iter_batches(self, batch_size: int, shuffle: bool = True, seed: int = 0,
-                     drop_last: bool = False) -> Iterator[tuple[Observation, np.ndarray]]:
-        """Observations (leading shape (B,)) and int64 actions (B,): every sample once.
+                     drop_last: bool = False) -> Iterator[Batch]:
+        """Batches of observations (leading shape (B,)), int64 actions (B,) and action counts
+        (B, 6): every sample once.
 
         Without `shuffle`, samples come in shard order, each sorted by (game, agent, step).
         The last batch is smaller unless `drop_last`, which drops it.
@@ -139,7 +146,7 @@ class Dataset:
             columns = decode_columns(pool, self.board_size)
             del pool  # the decoded columns hold the only copy of the buffer
             for i in range(0, full, batch_size):
-                yield to_observation(columns, order[i:i + batch_size])
+                yield to_batch(columns, order[i:i + batch_size])
         if leftover and leftover[0].num_rows and not drop_last:
             yield decode(leftover[0], self.board_size)
 

@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..agents.simple import SimpleMemory, new_memory, simple_actions
-from ..game.constants import NUM_AGENTS, TEAM
+from ..agents.simple import SimpleMemory, new_memory, simple_action_counts, simple_actions
+from ..game.constants import NUM_ACTIONS, NUM_AGENTS, TEAM
 from ..game.engine import Games
 from ..game.seeding import game_seeds
 from .schema import Samples
@@ -28,8 +28,15 @@ def _reset_memory(memory: SimpleMemory, slot: int, rngs: list[np.random.Generato
             field[NUM_AGENTS * slot + seat] = fresh[0]
 
 
-def play_games(seed: int, games: range, batch_games: int = BATCH_GAMES) -> Samples:
-    """Every decision of the living agents in games `games` (in play order)."""
+def play_games(seed: int, games: range, batch_games: int = BATCH_GAMES,
+               label_draws: int = 0) -> Samples:
+    """Every decision of the living agents in games `games` (in play order).
+
+    With `label_draws` > 0, each decision also carries SimpleAgent's action counts over that many
+    independent draws from the same memory (`simple_action_counts`): the soft target that
+    behaviour cloning learns the whole tie-breaking distribution from. The draws leave the agents'
+    memories and streams alone, so the games played are the same with or without them.
+    """
     engine = Games(min(batch_games, len(games)), TEAM)
     memory = new_memory(NUM_AGENTS * engine.num_games, np.random.default_rng(0))  # reseeded
     slot_game = np.full(engine.num_games, -1, np.int64)
@@ -53,9 +60,12 @@ def play_games(seed: int, games: range, batch_games: int = BATCH_GAMES) -> Sampl
     while (slot_game >= 0).any():
         active = (engine.alive & ~engine.done[:, None]).ravel()
         rows = engine.obs.agent_rows()
+        counts = (simple_action_counts(rows, memory, label_draws, active) if label_draws
+                  else np.zeros((len(active), NUM_ACTIONS), np.uint8))
         actions = simple_actions(rows, memory, active)
         recorded.append(Samples(rows, actions, np.repeat(slot_game, NUM_AGENTS),
-                                np.repeat(slot_seed, NUM_AGENTS)).take(np.flatnonzero(active)))
+                                np.repeat(slot_seed, NUM_AGENTS), counts)
+                        .take(np.flatnonzero(active)))
         engine.step(actions.reshape(-1, NUM_AGENTS))
         start(np.flatnonzero(engine.done & (slot_game >= 0)))
     return Samples.concatenate(recorded)

@@ -1,7 +1,9 @@
 """The on-disk form of expert samples: one Parquet row per (game, step, agent) decision.
 
 A row holds the agent's raw observation (the `Observation` fields, not the 19 expanded planes),
-the action it took and the keys that name it. The five 11x11 maps go into one fixed-size binary
+the action it took, the keys that name it, and (schema 2) `action_counts`: how often SimpleAgent
+chose each of the 6 actions in the shard's `label_draws` independent draws from the same memory
+(all zero when the shard was collected without draws). The five 11x11 maps go into one fixed-size binary
 column `maps` (board, bomb_blast_strength, bomb_life, bomb_moving_direction, flame_life, each
 row-major), `position` (2 bytes) and `alive` (4 bytes) into small fixed-size binary columns, and
 the scalars into the narrowest integer types. Rows are sorted by (game, agent_id, step_count), so
@@ -9,7 +11,8 @@ consecutive rows are one agent's consecutive views, which differ in a few cells:
 sample in about 15 bytes.
 
 Every shard carries two key/value metadata entries: `rllib_pommer.schema_version` (SCHEMA_VERSION)
-and `rllib_pommer.shard`, a JSON object saying what the shard covers (see `ShardMeta`).
+and `rllib_pommer.shard`, a JSON object saying what the shard covers (see `ShardMeta`). Shards of
+schema 1 (no `action_counts`) still read, with zero counts.
 """
 
 from __future__ import annotations
@@ -24,9 +27,11 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from ..game.constants import NUM_ACTIONS
 from ..game.observation import Observation, empty_observations
 
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
+READABLE_VERSIONS = ("1", "2")
 VERSION_KEY = b"rllib_pommer.schema_version"
 SHARD_KEY = b"rllib_pommer.shard"
 SHARD_GLOB = "shard-*.parquet"
@@ -45,8 +50,9 @@ STORED_DTYPES = {
     "step_count": np.uint16,
 }
 KEY_DTYPES = {"game": np.int32, "board_seed": np.uint32, "action": np.uint8}
-COLUMNS = ("game", "agent_id", "step_count", "action", "board_seed", "maps",
-           *(name for name in STORED_DTYPES if name not in ("agent_id", "step_count")))
+COLUMNS_V1 = ("game", "agent_id", "step_count", "action", "board_seed", "maps",
+              *(name for name in STORED_DTYPES if name not in ("agent_id", "step_count")))
+COLUMNS = (*COLUMNS_V1, "action_counts")
 
 ROW_GROUP_ROWS = 16384  # ~18 games; the reader's unit of shuffling and of reading
 WRITE_OPTIONS = {"compression": "zstd", "compression_level": 3, "row_group_size": ROW_GROUP_ROWS,
@@ -60,10 +66,11 @@ class Samples(NamedTuple):
     action: np.ndarray  # (K,) int64
     game: np.ndarray  # (K,) index of the game in the dataset
     board_seed: np.ndarray  # (K,) the seed the game's board was generated from
+    action_counts: np.ndarray  # (K, 6) uint8 SimpleAgent's choices over the label draws
 
     def take(self, index) -> Samples:
         return Samples(self.obs.select(index), self.action[index], self.game[index],
-                       self.board_seed[index])
+                       self.board_seed[index], self.action_counts[index])
 
     @staticmethod
     def concatenate(parts: Sequence[Samples]) -> Samples:
@@ -84,6 +91,7 @@ class ShardMeta:
     board_size: int
     game_type: str = "team"
     agents: str = "simple"
+    label_draws: int = 0  # SimpleAgent draws behind each row's action_counts (0: none)
 
     def __str__(self) -> str:
         return (f"{self.agents} {self.game_type} games {self.first_game}..{self.stop_game - 1} "
@@ -128,6 +136,7 @@ def encode(samples: Samples, meta: ShardMeta) -> pa.Table:
     for i, name in enumerate(MAP_FIELDS):  # gathered map by map: 3x faster than select + stack
         maps[:, i] = getattr(obs, name)[order]
     columns["maps"] = _fixed_size(maps)
+    columns["action_counts"] = _fixed_size(samples.action_counts[order].astype(np.uint8))
     for name, dtype in STORED_DTYPES.items():
         values = _narrow(getattr(obs, name)[order], dtype, name)
         columns[name] = _fixed_size(values.view(np.uint8)) if values.ndim > 1 else values
@@ -147,22 +156,34 @@ def decode_columns(table: pa.Table, board_size: int) -> dict[str, np.ndarray]:
         column = table.column(name)
         columns[name] = _unpack(column, shape) if shape else column.to_numpy()
     columns["action"] = table.column("action").to_numpy()
+    columns["action_counts"] = (_unpack(table.column("action_counts"), (NUM_ACTIONS,))
+                                if "action_counts" in table.column_names
+                                else np.zeros((table.num_rows, NUM_ACTIONS), np.uint8))
     return columns
 
 
-def to_observation(columns: dict[str, np.ndarray],
-                   index=slice(None)) -> tuple[Observation, np.ndarray]:
-    """Rows `index` of decoded columns: an `Observation` with leading shape (rows,) and the
-    dtypes of `empty_observations` (contiguous copies), and the int64 actions."""
+class Batch(NamedTuple):
+    """Decoded rows: observations with leading shape (B,), int64 actions (B,) and uint8 action
+    counts (B, 6)."""
+
+    obs: Observation
+    action: np.ndarray
+    action_counts: np.ndarray
+
+
+def to_batch(columns: dict[str, np.ndarray], index=slice(None)) -> Batch:
+    """Rows `index` of decoded columns, with the observation in the dtypes of
+    `empty_observations` (contiguous copies)."""
     template = empty_observations(1, 1)
     obs = Observation(**{name: np.ascontiguousarray(columns[name][index],
                                                     getattr(template, name).dtype)
                          for name in Observation._fields})
-    return obs, columns["action"][index].astype(np.int64)
+    return Batch(obs, columns["action"][index].astype(np.int64),
+                 np.ascontiguousarray(columns["action_counts"][index]))
 
 
-def decode(table: pa.Table, board_size: int) -> tuple[Observation, np.ndarray]:
-    return to_observation(decode_columns(table, board_size))
+def decode(table: pa.Table, board_size: int) -> Batch:
+    return to_batch(decode_columns(table, board_size))
 
 
 def write_table(table: pa.Table, file) -> None:
@@ -178,10 +199,11 @@ def read_meta(path: Path) -> tuple[pq.ParquetFile, ShardMeta]:
         raise ValueError(f"{path}: not a readable Parquet shard ({exc})") from exc
     metadata = shard.metadata.metadata or {}
     version = metadata.get(VERSION_KEY, b"none").decode()
-    if version != str(SCHEMA_VERSION):
-        raise ValueError(f"{path}: schema version {version}, this reader expects "
-                         f"{SCHEMA_VERSION}; re-collect it")
-    missing = [name for name in COLUMNS if name not in shard.schema_arrow.names]
+    if version not in READABLE_VERSIONS:
+        raise ValueError(f"{path}: schema version {version}, this reader reads "
+                         f"{', '.join(READABLE_VERSIONS)}; re-collect it")
+    required = COLUMNS_V1 if version == "1" else COLUMNS
+    missing = [name for name in required if name not in shard.schema_arrow.names]
     if missing or SHARD_KEY not in metadata:
         raise ValueError(f"{path}: malformed shard (missing {missing or SHARD_KEY.decode()})")
     return shard, ShardMeta(**json.loads(metadata[SHARD_KEY]))

@@ -12,6 +12,7 @@ from rllib_pommer.data.collector import Collection
 
 TINY_GAMES, TINY_SEED, TINY_SHARD_GAMES = 6, 7, 3
 TINY_ROW_GROUP_ROWS = 500  # several row groups per shard, so shuffling spans several windows
+TINY_LABEL_DRAWS = 8  # soft targets recorded, so every test reads and writes them
 
 
 @pytest.fixture(scope="session")
@@ -19,7 +20,7 @@ def tiny_dataset(tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp("tiny")
     with pytest.MonkeyPatch.context() as patch:
         patch.setitem(schema.WRITE_OPTIONS, "row_group_size", TINY_ROW_GROUP_ROWS)
-        Collection(out, TINY_GAMES, TINY_SEED, TINY_SHARD_GAMES).run(workers=1)
+        Collection(out, TINY_GAMES, TINY_SEED, TINY_SHARD_GAMES, TINY_LABEL_DRAWS).run(workers=1)
     return out
 
 

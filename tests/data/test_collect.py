@@ -22,7 +22,7 @@ from rllib_pommer.game.constants import TEAM
 from rllib_pommer.game.engine import Game
 from rllib_pommer.game.seeding import game_seeds
 
-from .conftest import TINY_GAMES, TINY_SEED, TINY_SHARD_GAMES, read_all
+from .conftest import TINY_GAMES, TINY_LABEL_DRAWS, TINY_SEED, TINY_SHARD_GAMES, read_all
 
 
 def _keys(table) -> np.ndarray:
@@ -31,17 +31,18 @@ def _keys(table) -> np.ndarray:
 
 
 def test_same_seed_same_dataset_whatever_the_workers(tiny_dataset, tmp_path):
-    Collection(tmp_path / "two", TINY_GAMES, TINY_SEED, TINY_SHARD_GAMES).run(workers=2)
+    Collection(tmp_path / "two", TINY_GAMES, TINY_SEED, TINY_SHARD_GAMES, TINY_LABEL_DRAWS).run(workers=2)
     assert read_all(tmp_path / "two").equals(read_all(tiny_dataset))
-    Collection(tmp_path / "other", TINY_GAMES, TINY_SEED + 1, TINY_SHARD_GAMES).run(workers=1)
+    Collection(tmp_path / "other", TINY_GAMES, TINY_SEED + 1, TINY_SHARD_GAMES, TINY_LABEL_DRAWS).run(workers=1)
     assert not read_all(tmp_path / "other").equals(read_all(tiny_dataset))
 
 
 def test_refilled_batch_slots_play_the_same_games(tiny_dataset):
     """One slot playing the three games in turn (memory rows reset in between) gives the same
     shard as three slots playing them side by side."""
-    meta = plan_shards(TINY_GAMES, TINY_SEED, TINY_SHARD_GAMES)[0]
-    one_slot = encode(play_games(TINY_SEED, range(TINY_SHARD_GAMES), batch_games=1), meta)
+    meta = plan_shards(TINY_GAMES, TINY_SEED, TINY_SHARD_GAMES, TINY_LABEL_DRAWS)[0]
+    one_slot = encode(play_games(TINY_SEED, range(TINY_SHARD_GAMES), batch_games=1,
+                                 label_draws=TINY_LABEL_DRAWS), meta)
     shard, _ = read_meta(tiny_dataset / "shard-000000.parquet")
     assert one_slot.replace_schema_metadata(None).equals(shard.read().replace_schema_metadata(None))
 
@@ -62,7 +63,7 @@ def test_one_row_per_decision_of_each_living_agent(tiny_dataset):
 def test_samples_read_back_equal_a_replay_of_the_game(tiny_dataset, game):
     """Replay with the single-game API and one SimpleAgent object per seat, seeded as the
     collector seeds game `game`: every observation and action must come back from the reader."""
-    obs_rows, action_rows = next(open_dataset(tiny_dataset).iter_batches(10**6, shuffle=False))
+    obs_rows, action_rows, _ = next(open_dataset(tiny_dataset).iter_batches(10**6, shuffle=False))
     table = read_all(tiny_dataset)
     keys = _keys(table)
     row_of = {tuple(k): i for i, k in enumerate(keys)}
@@ -84,6 +85,23 @@ def test_samples_read_back_equal_a_replay_of_the_game(tiny_dataset, game):
         obs, _, _, _ = engine.step(actions)
         step += 1
     assert checked > 100 and not [k for k in row_of if k[0] == game]
+
+
+def test_label_draws_leave_the_games_alone_and_sample_the_recorded_policy(tiny_dataset):
+    """With or without soft targets the same games are played; each row's counts add up to the
+    draws, and the recorded action (one more sample of the same distribution) is usually among
+    the counted ones, about as often as two SimpleAgents agree (0.78 on reference games)."""
+    games = range(TINY_SHARD_GAMES)
+    plain = play_games(TINY_SEED, games)
+    soft = play_games(TINY_SEED, games, label_draws=TINY_LABEL_DRAWS)
+    assert np.array_equal(plain.action, soft.action) and not plain.action_counts.any()
+    assert (soft.action_counts.sum(1) == TINY_LABEL_DRAWS).all()
+    recorded_share = soft.action_counts[np.arange(len(soft.action)), soft.action].mean()
+    assert 0.65 < recorded_share / TINY_LABEL_DRAWS < 0.95
+    undecided = (soft.action_counts.max(1) < TINY_LABEL_DRAWS).mean()
+    assert 0.05 < undecided < 0.6  # random tie-breaks are common, but most decisions are fixed
+    again = play_games(TINY_SEED, games, label_draws=TINY_LABEL_DRAWS)
+    assert np.array_equal(again.action_counts, soft.action_counts)
 
 
 def _collect_command(out, games, shard_games) -> list[str]:
@@ -126,7 +144,7 @@ def test_rerun_keeps_finished_shards_and_clears_temporaries(tiny_dataset, tmp_pa
     kept_stamp = kept.stat().st_mtime_ns
     redone.unlink()
     (out / ".shard-000001.12345.tmp").write_bytes(b"half a shard")
-    collection = Collection(out, TINY_GAMES, TINY_SEED, TINY_SHARD_GAMES)
+    collection = Collection(out, TINY_GAMES, TINY_SEED, TINY_SHARD_GAMES, TINY_LABEL_DRAWS)
     assert collection.missing == [1]
     collection.run(workers=1)
     assert kept.stat().st_mtime_ns == kept_stamp
@@ -136,12 +154,12 @@ def test_rerun_keeps_finished_shards_and_clears_temporaries(tiny_dataset, tmp_pa
 
 def test_shards_of_another_dataset_are_refused(tiny_dataset):
     with pytest.raises(ValueError, match="shard-000000.parquet.*seed 7.*seed 8"):
-        Collection(tiny_dataset, TINY_GAMES, TINY_SEED + 1, TINY_SHARD_GAMES)
+        Collection(tiny_dataset, TINY_GAMES, TINY_SEED + 1, TINY_SHARD_GAMES, TINY_LABEL_DRAWS)
     with pytest.raises(ValueError, match="shard-000001.parquet.*games 3..5.*games 3..3"):
-        Collection(tiny_dataset, 4, TINY_SEED, TINY_SHARD_GAMES)
+        Collection(tiny_dataset, 4, TINY_SEED, TINY_SHARD_GAMES, TINY_LABEL_DRAWS)
     with pytest.raises(ValueError, match="shard-000001.parquet.*no such shard"):
-        Collection(tiny_dataset, 3, TINY_SEED, TINY_SHARD_GAMES)
-    assert Collection(tiny_dataset, 9, TINY_SEED, TINY_SHARD_GAMES).missing == [2]  # grows
+        Collection(tiny_dataset, 3, TINY_SEED, TINY_SHARD_GAMES, TINY_LABEL_DRAWS)
+    assert Collection(tiny_dataset, 9, TINY_SEED, TINY_SHARD_GAMES, TINY_LABEL_DRAWS).missing == [2]  # grows
 
 
 def test_cli_summary_and_bad_arguments(tmp_path, capsys):

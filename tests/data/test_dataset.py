@@ -10,20 +10,21 @@ import pytest
 
 from rllib_pommer.data import dataset as dataset_module
 from rllib_pommer.data.dataset import open_dataset
-from rllib_pommer.data.schema import VERSION_KEY, decode
+from rllib_pommer.data.schema import VERSION_KEY, Batch, decode
 from rllib_pommer.game.observation import Observation, empty_observations
 
 from .conftest import TINY_GAMES, read_all
 
 
-def _row_bytes(obs: Observation, actions: np.ndarray) -> np.ndarray:
-    """Each sample's fields and action as one sortable byte string."""
+def _row_bytes(obs: Observation, actions: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """Each sample's fields, action and action counts as one sortable byte string."""
     parts = [np.ascontiguousarray(f).reshape(len(actions), -1).view(np.uint8) for f in obs]
-    rows = np.ascontiguousarray(np.concatenate([*parts, actions.reshape(-1, 1).view(np.uint8)], 1))
+    rows = np.ascontiguousarray(np.concatenate([*parts, actions.reshape(-1, 1).view(np.uint8),
+                                                counts], 1))
     return rows.view(f"V{rows.shape[1]}").ravel()
 
 
-def _same_samples(batches, expected: tuple[Observation, np.ndarray]) -> bool:
+def _same_samples(batches, expected: Batch) -> bool:
     got = np.concatenate([_row_bytes(*batch) for batch in batches])
     return np.array_equal(np.sort(got), np.sort(_row_bytes(*expected)))
 
@@ -75,7 +76,7 @@ def test_other_schema_version_is_named_with_both_versions(damaged):
     table = pq.read_table(shard)
     pq.write_table(table.replace_schema_metadata({**table.schema.metadata, VERSION_KEY: b"0"}),
                    shard)
-    with pytest.raises(ValueError, match=r"shard-000001.parquet: schema version 0.* expects 1"):
+    with pytest.raises(ValueError, match=r"shard-000001.parquet: schema version 0.* reads 1, 2"):
         open_dataset(damaged)
 
 
@@ -89,8 +90,9 @@ def test_split_puts_each_game_on_one_side(tiny_dataset):
     for part in (train, val):
         rows = np.isin(games, part.games())
         assert part.num_samples == rows.sum()
-        assert _same_samples(part.iter_batches(64), (everything[0].select(rows),
-                                                     everything[1][rows]))
+        assert _same_samples(part.iter_batches(64), Batch(everything.obs.select(rows),
+                                                          everything.action[rows],
+                                                          everything.action_counts[rows]))
     assert list(data.split(0.5, seed=4)[1].games()) == [0, 1, 2, 3, 5]
     assert data.split(0.0)[1].num_samples == 0 and data.split(1.0)[0].num_samples == 0
     with pytest.raises(ValueError, match="val_fraction"):
@@ -102,17 +104,17 @@ def test_every_sample_once_per_epoch(tiny_dataset, monkeypatch, shuffle, batch_s
     monkeypatch.setattr(dataset_module, "SHUFFLE_ROW_GROUPS", 3)  # several windows and carries
     data = open_dataset(tiny_dataset)
     batches = list(data.iter_batches(batch_size, shuffle=shuffle, seed=1))
-    assert [len(a) for _, a in batches[:-1]] == [batch_size] * (len(batches) - 1)
-    assert sum(len(a) for _, a in batches) == data.num_samples
+    assert [len(b.action) for b in batches[:-1]] == [batch_size] * (len(batches) - 1)
+    assert sum(len(b.action) for b in batches) == data.num_samples
     assert _same_samples(batches, decode(read_all(tiny_dataset), data.board_size))
     template = empty_observations(1)
-    for obs, actions in batches:
-        assert actions.dtype == np.int64
+    for obs, actions, counts in batches:
+        assert actions.dtype == np.int64 and counts.dtype == np.uint8 and counts.shape[1] == 6
         for name, field in obs._asdict().items():
             expected = getattr(template, name)
             assert field.dtype == expected.dtype and field.shape[1:] == expected.shape[2:], name
     dropped = list(data.iter_batches(batch_size, shuffle=shuffle, seed=1, drop_last=True))
-    assert sum(len(a) for _, a in dropped) == data.num_samples // batch_size * batch_size
+    assert sum(len(b.action) for b in dropped) == data.num_samples // batch_size * batch_size
 
 
 def test_shuffle_order_follows_the_seed(tiny_dataset):
