@@ -1,4 +1,10 @@
-"""Behaviour cloning: cross-entropy from recorded SimpleAgent decisions to `PommerNet` logits.
+"""Behaviour cloning: cross-entropy from SimpleAgent's decisions to `PommerNet` logits.
+
+The target of a sample is SimpleAgent's action distribution where the dataset recorded one
+(`collect --label-draws K`: K tie-breaking draws from the agent's memory, plus the recorded action
+as one more draw), else the recorded action alone. SimpleAgent breaks ties at random, so a single
+recorded action is a noisy label for about half of all decisions; the counts tell the network how
+often each action is right, which the recorded action alone says only over many samples.
 
 Streams the Parquet shards (never the whole dataset in RAM), holds out whole games for
 validation, logs loss and accuracy to TensorBoard, and checkpoints every few thousand batches so
@@ -42,6 +48,10 @@ class BCConfig:
     checkpoint_every: int = 1000  # batches
     max_batches_per_epoch: int | None = None
     max_val_batches: int | None = 100
+    # Speed (rllib_pommer.bench learn, one thread, batch 512): channels_last 1.36x and with bf16
+    # autocast 2.2x the samples/s of plain float32 NCHW. Validation always runs in float32.
+    channels_last: bool = True
+    bf16: bool = True
 
     @property
     def training_dir(self) -> Path:
@@ -55,26 +65,58 @@ def set_cpu_options(threads: int) -> None:
     torch.set_flush_denormal(True)
 
 
-def _batch_tensors(obs, actions) -> tuple[torch.Tensor, torch.Tensor]:
-    return torch.from_numpy(featurize(obs)), torch.from_numpy(np.asarray(actions, np.int64))
+def soft_targets(actions: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """float32 (B, 6): each row's counted draws plus its recorded action, normalised (a one-hot
+    of the recorded action where nothing was counted)."""
+    targets = counts.astype(np.float32)
+    targets[np.arange(len(actions)), actions] += 1.0
+    return targets / targets.sum(1, keepdims=True)
+
+
+def _inputs(obs, cfg: BCConfig) -> torch.Tensor:
+    x = torch.from_numpy(featurize(obs))
+    return x.contiguous(memory_format=torch.channels_last) if cfg.channels_last else x
 
 
 def evaluate(net: PommerNet, data: Dataset, cfg: BCConfig) -> dict:
-    """Mean loss and accuracy on (up to `max_val_batches` batches of) `data`."""
+    """On (up to `max_val_batches` batches of) `data`: the mean loss against the targets,
+    `accuracy` (greedy action == recorded action) and, over samples with counted draws,
+    `mode_accuracy` (greedy action == SimpleAgent's most frequent one) and `expected_agreement`
+    (the share of SimpleAgent's draws that chose the greedy action: what the recorded-action
+    accuracy tends to on unseen games)."""
     net.eval()
     loss_sum, correct, count = 0.0, 0, 0
+    mode_hits, agreement, counted = 0, 0.0, 0
     with torch.no_grad():
-        for i, (obs, actions) in enumerate(data.iter_batches(cfg.batch_size, shuffle=False)):
+        for i, (obs, actions, counts) in enumerate(data.iter_batches(cfg.batch_size,
+                                                                    shuffle=False)):
             if cfg.max_val_batches is not None and i >= cfg.max_val_batches:
                 break
-            x, y = _batch_tensors(obs, actions)
-            logits = net(x)
-            loss_sum += F.cross_entropy(logits, y, reduction="sum").item()
-            correct += (logits.argmax(-1) == y).sum().item()
-            count += len(y)
+            logits = net(_inputs(obs, cfg)).float()
+            targets = torch.from_numpy(soft_targets(actions, counts))
+            loss_sum += F.cross_entropy(logits, targets, reduction="sum").item()
+            greedy = logits.argmax(-1).numpy()
+            correct += int((greedy == actions).sum())
+            count += len(actions)
+            draws = counts.sum(1)
+            rows = np.flatnonzero(draws)
+            mode_hits += int((greedy[rows] == counts[rows].argmax(1)).sum())
+            agreement += float((counts[rows, greedy[rows]] / draws[rows]).sum())
+            counted += len(rows)
     net.train()
-    return {"loss": loss_sum / max(count, 1), "accuracy": correct / max(count, 1),
-            "samples": count}
+    metrics = {"loss": loss_sum / max(count, 1), "accuracy": correct / max(count, 1),
+               "samples": count}
+    if counted:
+        metrics.update(mode_accuracy=mode_hits / counted, expected_agreement=agreement / counted)
+    return metrics
+
+
+def _describe(metrics: dict) -> str:
+    text = f"loss {metrics['loss']:.4f}, accuracy {metrics['accuracy']:.4f}"
+    if "mode_accuracy" in metrics:
+        text += (f", mode accuracy {metrics['mode_accuracy']:.4f}, expected agreement "
+                 f"{metrics['expected_agreement']:.4f}")
+    return f"{text} on {metrics['samples']} samples"
 
 
 def _save_atomic(obj, path: Path) -> None:
@@ -113,6 +155,8 @@ def train(cfg: BCConfig) -> dict:
     train_data, val_data = open_dataset(cfg.data).split(cfg.val_fraction, cfg.seed)
     cfg.training_dir.mkdir(parents=True, exist_ok=True)
     net = PommerNet(dropout=cfg.dropout)
+    if cfg.channels_last:
+        net = net.to(memory_format=torch.channels_last)
     optimizer = torch.optim.Adam(net.parameters(), lr=cfg.lr)
     checkpoint = _Checkpoint(cfg)
     start_epoch, start_batch, seconds = checkpoint.load(net, optimizer)
@@ -126,20 +170,20 @@ def train(cfg: BCConfig) -> dict:
         stream = train_data.iter_batches(cfg.batch_size, shuffle=True, seed=cfg.seed * 1000 + epoch)
         bar = tqdm(total=batches_per_epoch, initial=first, desc=f"epoch {epoch + 1}/{cfg.epochs}",
                    unit="batch")
-        for batch, (obs, actions) in enumerate(stream):
+        for batch, (obs, actions, counts) in enumerate(stream):
             if batch >= batches_per_epoch:
                 break
             if batch < first:
                 continue
-            x, y = _batch_tensors(obs, actions)
-            logits = net(x)
-            loss = F.cross_entropy(logits, y)
+            with torch.autocast("cpu", dtype=torch.bfloat16, enabled=cfg.bf16):
+                logits = net(_inputs(obs, cfg)).float()
+            loss = F.cross_entropy(logits, torch.from_numpy(soft_targets(actions, counts)))
             optimizer.zero_grad()
             loss.backward()
             optimizer.step()
             step = epoch * batches_per_epoch + batch
             if batch % 50 == 0:
-                accuracy = (logits.argmax(-1) == y).float().mean().item()
+                accuracy = (logits.argmax(-1).numpy() == actions).mean()
                 writer.add_scalar("train/loss", loss.item(), step)
                 writer.add_scalar("train/accuracy", accuracy, step)
                 bar.set_postfix(loss=f"{loss.item():.3f}", acc=f"{accuracy:.3f}")
@@ -150,8 +194,10 @@ def train(cfg: BCConfig) -> dict:
         val = evaluate(net, val_data, cfg)
         writer.add_scalar("val/loss", val["loss"], (epoch + 1) * batches_per_epoch)
         writer.add_scalar("val/accuracy", val["accuracy"], (epoch + 1) * batches_per_epoch)
-        print(f"epoch {epoch + 1}: validation loss {val['loss']:.4f}, "
-              f"accuracy {val['accuracy']:.4f} on {val['samples']} samples")
+        for name in ("mode_accuracy", "expected_agreement"):
+            if name in val:
+                writer.add_scalar(f"val/{name}", val[name], (epoch + 1) * batches_per_epoch)
+        print(f"epoch {epoch + 1}: validation {_describe(val)}", flush=True)
         checkpoint.save(net, optimizer, epoch + 1, 0, time.perf_counter() - started)
     writer.close()
     if start_epoch >= cfg.epochs:  # nothing left to train: measure the finished model
@@ -159,10 +205,12 @@ def train(cfg: BCConfig) -> dict:
     metrics = {
         "validation_loss": val["loss"], "validation_accuracy": val["accuracy"],
         "validation_samples": val["samples"], "train_samples": train_data.num_samples,
+        **{f"validation_{name}": val[name] for name in ("mode_accuracy", "expected_agreement")
+           if name in val},
         "batches_per_epoch": batches_per_epoch, "training_seconds": time.perf_counter() - started,
         "config": {k: str(v) if isinstance(v, Path) else v for k, v in asdict(cfg).items()},
     }
     cfg.out.mkdir(parents=True, exist_ok=True)
-    _save_atomic(net.state_dict(), cfg.out / WEIGHTS_FILE)
+    _save_atomic({k: v.contiguous() for k, v in net.state_dict().items()}, cfg.out / WEIGHTS_FILE)
     (cfg.out / METRICS_FILE).write_text(json.dumps(metrics, indent=1))
     return metrics

@@ -9,7 +9,9 @@ Training state and TensorBoard logs go to OUT/training/; re-running the same com
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
+import typing
 from pathlib import Path
 
 from .bc import WEIGHTS_FILE, BCConfig, train
@@ -22,24 +24,38 @@ def write_policy_file(out: Path, description: str) -> Path:
     return policy
 
 
+_HELP = {
+    "data": "dataset folder of shards", "out": "policy folder to write",
+    "threads": "torch threads", "checkpoint_every": "batches between training checkpoints",
+    "channels_last": "channels-last tensors (faster on CPU)",
+    "bf16": "bfloat16 autocast in training (faster on CPUs with AVX-512 BF16)",
+}
+
+
+def _options(parser: argparse.ArgumentParser) -> None:
+    """One option per `BCConfig` field, with its type and default, so they are written once."""
+    hints = typing.get_type_hints(BCConfig)
+    for field in dataclasses.fields(BCConfig):
+        flag = "--" + field.name.replace("_", "-")
+        hint = hints[field.name]
+        help_text = _HELP.get(field.name)
+        if field.default is dataclasses.MISSING:
+            parser.add_argument(flag, type=Path, required=True, help=help_text)
+        elif hint is bool:
+            parser.add_argument(flag, action=argparse.BooleanOptionalAction,
+                                default=field.default, help=help_text)
+        else:
+            kind = next(t for t in typing.get_args(hint) or (hint,) if t is not type(None))
+            parser.add_argument(flag, type=kind, default=field.default,
+                                help=help_text or f"default {field.default}")
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m rllib_pommer.imitate", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--data", type=Path, required=True, help="dataset folder of shards")
-    parser.add_argument("--out", type=Path, required=True, help="policy folder to write")
-    parser.add_argument("--epochs", type=int, default=1)
-    parser.add_argument("--batch-size", type=int, default=512)
-    parser.add_argument("--lr", type=float, default=1e-3)
-    parser.add_argument("--dropout", type=float, default=0.2)
-    parser.add_argument("--val-fraction", type=float, default=0.05)
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--threads", type=int, default=2, help="torch threads")
-    parser.add_argument("--max-batches-per-epoch", type=int, default=None)
+    _options(parser)
     args = parser.parse_args(argv)
-    cfg = BCConfig(data=args.data, out=args.out, epochs=args.epochs, batch_size=args.batch_size,
-                   lr=args.lr, dropout=args.dropout, val_fraction=args.val_fraction,
-                   seed=args.seed, threads=args.threads,
-                   max_batches_per_epoch=args.max_batches_per_epoch)
+    cfg = BCConfig(**vars(args))
     try:
         metrics = train(cfg)
     except ValueError as exc:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 import torch
 
@@ -20,7 +21,7 @@ from rllib_pommer.network import PommerNet
 @pytest.fixture(scope="module")
 def dataset(tmp_path_factory):
     out = tmp_path_factory.mktemp("expert")
-    Collection(out, 8, 3, 4).run(workers=1)
+    Collection(out, 8, 3, 4, label_draws=8).run(workers=1)
     return out
 
 
@@ -40,8 +41,28 @@ def test_one_epoch_lowers_the_validation_loss(dataset, tmp_path):
     metrics = train(cfg)
     assert metrics["validation_loss"] < before["loss"] - 0.1
     assert metrics["validation_accuracy"] > before["accuracy"]
+    assert metrics["validation_expected_agreement"] > before["expected_agreement"] + 0.1
+    assert 0 < metrics["validation_mode_accuracy"] <= 1
     saved = json.loads((cfg.out / bc.METRICS_FILE).read_text())
     assert saved["validation_samples"] == metrics["validation_samples"] > 0
+
+
+def test_soft_targets_count_the_recorded_action_as_one_more_draw():
+    counts = np.array([[0, 0, 0, 0, 0, 0], [2, 0, 0, 1, 0, 0]], np.uint8)
+    targets = bc.soft_targets(np.array([4, 3]), counts)
+    assert np.allclose(targets, [[0, 0, 0, 0, 1, 0], [0.5, 0, 0, 0.5, 0, 0]])
+
+
+@pytest.mark.parametrize("fast", [False, True])
+def test_fast_settings_train_the_same_network(dataset, tmp_path, fast):
+    """channels_last and bf16 autocast change speed, not what is learned: both builds learn and
+    write plain contiguous weights that load into a fresh PommerNet."""
+    cfg = _config(dataset, tmp_path / "fast", channels_last=fast, bf16=fast)
+    metrics = train(cfg)
+    assert metrics["validation_loss"] < np.log(6) - 0.15  # an untrained net scores ~log(6)
+    weights = torch.load(cfg.out / bc.WEIGHTS_FILE, weights_only=True)
+    assert all(w.is_contiguous() for w in weights.values())
+    PommerNet().load_state_dict(weights)
 
 
 def test_an_interrupted_run_resumes_to_the_same_weights(dataset, tmp_path, monkeypatch):
