@@ -1,4 +1,4 @@
-"""SimpleAgent match statistics beside the reference's (../shared/reference/simpleagent_stats.json).
+"""SimpleAgent match statistics beside the reference's (tests/reference/simpleagent_stats.json).
 
     python benchmarks/match_stats.py [--games 1000] [--seed 0]
 
@@ -18,7 +18,7 @@ from tqdm import tqdm
 
 from rllib_pommer.arena import MatchSpec, play_match, summarise
 
-REFERENCE = Path(__file__).resolve().parents[2] / "shared" / "reference" / "simpleagent_stats.json"
+REFERENCE = Path(__file__).resolve().parents[1] / "tests" / "reference" / "simpleagent_stats.json"
 CONFIGS = {"vs_SimpleAgent": "simple", "vs_StaticAgent": "static",
            "vs_SimpleAgent_NoBomb": "simple_nobomb"}
 # our summary key -> (reference value key, reference interval key)

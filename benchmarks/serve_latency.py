@@ -4,7 +4,7 @@
         [--requests 10000] [--warmup 200] [--json]
 
 Starts `python -m rllib_pommer.serve` on a free loopback port, waits for /ping, then plays the
-recorded observations of ../shared/reference/games_public.jsonl.gz in order, one request at a time
+recorded observations of tests/reference/games_public.jsonl.gz in order, one request at a time
 as the competition's runner did: per game one seat (game i: seat (i + pass) % 4), /init_agent, then
 that seat's observation before every step while it is alive. Each request is timed from sending
 to the decoded answer. Prints p50, p99 and max over `--requests` requests after `--warmup` untimed
@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 import requests
 
-GAMES = Path(__file__).resolve().parents[2] / "shared" / "reference" / "games_public.jsonl.gz"
+GAMES = Path(__file__).resolve().parents[1] / "tests" / "reference" / "games_public.jsonl.gz"
 STARTUP_SECONDS = 60.0
 PASSES = 8  # over the recorded games, each with other seats; about 12,000 requests per pass
 GAME_TYPES = {"PommeTeamCompetition-v0": 2, "PommeFFACompetition-v0": 1}

@@ -1,6 +1,6 @@
 """`python -m rllib_pommer.bench engine|agents|train [--json]`: our speed, side by side.
 
-`engine` runs protocol (a) of ../shared/reference/README.md §4 on the single-game API and on the
+`engine` runs protocol (a) of tests/reference/README.md §4 on the single-game API and on the
 batched API: 200 Team games per run with precomputed uniform random actions (800 x 4 per game),
 stepped until done; steps/s counts only time inside the step calls (which build all four
 observations), games/s the whole reset + steps.
@@ -37,7 +37,7 @@ GAMES_PER_RUN = 200
 SIMPLE_GAMES_PER_RUN = 20
 RUNS = 3
 REPO_ROOT = Path(__file__).resolve().parents[1]
-REFERENCE_SPEED = REPO_ROOT.parent / "shared" / "reference" / "reference_speed.json"
+REFERENCE_SPEED = REPO_ROOT / "tests" / "reference" / "reference_speed.json"
 
 
 def _run_actions(run: int) -> tuple[np.ndarray, np.ndarray]:

@@ -2,9 +2,10 @@
 
     verify FILE...   replay every game step by step and compare; the last line is
                      `verified G games, S steps, M mismatches` (exit 0 iff M == 0)
-    agree FILE --decisions DECISIONS.json
-                     feed each SimpleAgent seat's recorded observations to our SimpleAgent; the
-                     last line is `agreement A on N decisions; stable S on K decisions`
+    agree FILE --decisions DECISIONS.json [--policy NAME]
+                     feed each SimpleAgent seat's recorded observations to a policy (default our
+                     SimpleAgent); the last line is `agreement A on N decisions; stable S on K
+                     decisions`
     render FILE [--game K] --out OUT.png|OUT.gif [--step T] [--fog AGENT]
                      draw game K: one step as a PNG (default the last) or every step as a GIF,
                      in full or as agent AGENT sees it
@@ -40,7 +41,7 @@ def _verify(args: argparse.Namespace) -> int:
 
 
 def _agree(args: argparse.Namespace) -> int:
-    result = measure_agreement(args.file, args.decisions)
+    result = measure_agreement(args.file, args.decisions, args.policy)
     print(f"reference SimpleAgents agree with the recorded actions on {result.reference_mean:.4f}")
     print(format_line(result))
     return 0
@@ -69,6 +70,8 @@ def main(argv: list[str] | None = None) -> int:
     agree = sub.add_parser("agree", help="SimpleAgent decision agreement on recorded games")
     agree.add_argument("file", help="games as .jsonl or .jsonl.gz")
     agree.add_argument("--decisions", required=True, help="the reference decisions .json")
+    agree.add_argument("--policy", default="simple",
+                       help="the policy measured (a name or policy file; default simple)")
     agree.set_defaults(run=_agree)
     render = sub.add_parser("render", help="draw a recorded game as a PNG (one step) or a GIF")
     render.add_argument("file", help="games as .jsonl or .jsonl.gz")

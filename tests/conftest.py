@@ -1,4 +1,5 @@
-"""Shared test fixtures: where the recorded reference data live (beside the repo, never copied)."""
+"""Shared test fixtures: where the recorded reference data live (tests/reference/, in the repo,
+so every clone proves the engine's fidelity; tests/reference/README.md says what each file is)."""
 
 from __future__ import annotations
 
@@ -7,12 +8,12 @@ from pathlib import Path
 import pytest
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
-REFERENCE_DIR = REPO_ROOT.parent / "shared" / "reference"
+REFERENCE_DIR = REPO_ROOT / "tests" / "reference"
 PUBLIC_GAMES = REFERENCE_DIR / "games_public.jsonl.gz"
+DECISIONS = REFERENCE_DIR / "simpleagent_decisions_public.json"
+PAPER_TABLES = REFERENCE_DIR / "paper_tables.tex"
 
 
 @pytest.fixture(scope="session")
 def public_games() -> Path:
-    if not PUBLIC_GAMES.exists():
-        pytest.skip(f"reference games not found at {PUBLIC_GAMES} (../shared/reference is absent)")
     return PUBLIC_GAMES

@@ -1,4 +1,7 @@
-"""How often our SimpleAgent picks the reference's recorded action (reference README §7).
+"""How often a policy picks the reference SimpleAgent's recorded action (reference README §7).
+
+By default the policy is our SimpleAgent (the fidelity check of the compiled kernel); any named
+policy can be measured by the same ruler, e.g. an imitation clone (greedy if its file says so).
 
 The reference SimpleAgent breaks ties with Python's global random stream, so its recorded actions
 cannot all be reproduced. The decisions file says, per decision, how many of 8 differently seeded
@@ -18,7 +21,7 @@ import numpy as np
 
 from ..game.constants import Item
 from ..game.serialize import load_observation
-from .simple import SimpleAgent
+from .registry import make_agent
 
 ALL_AGREED = 8
 
@@ -51,7 +54,8 @@ def _games(games_path: Path, wanted: set[int]) -> Iterator[tuple[int, dict]]:
     raise ValueError(f"{games_path}: no game_index {min(remaining)} (the file is shorter)")
 
 
-def _seat_agreement(game: dict, game_index: int, row: dict) -> tuple[int, int, int]:
+def _seat_agreement(game: dict, game_index: int, row: dict,
+                    policy: str) -> tuple[int, int, int]:
     """(agreed, stable agreed, stable decisions) for one SimpleAgent seat of one game."""
     agent_id, digits = row["agent_id"], row["agree_of_8"]
     where = f"game_index {game_index}, agent_id {agent_id}"
@@ -59,7 +63,7 @@ def _seat_agreement(game: dict, game_index: int, row: dict) -> tuple[int, int, i
         raise ValueError(f"{where}: decisions row has seed {row['seed']}, game has {game['seed']}")
     if not game.get("has_observations"):
         raise ValueError(f"{where}: the game has no recorded observations")
-    agent = SimpleAgent()
+    agent = make_agent(policy)
     agent.reset(
         agent_id,
         game["initial_observations"][agent_id]["game_type"],
@@ -85,8 +89,9 @@ def _seat_agreement(game: dict, game_index: int, row: dict) -> tuple[int, int, i
     return agreed, stable_agreed, stable
 
 
-def measure_agreement(games_path: str | Path, decisions_path: str | Path) -> AgreementResult:
-    """Replay every SimpleAgent seat of the decisions file through a fresh `SimpleAgent`.
+def measure_agreement(games_path: str | Path, decisions_path: str | Path,
+                      policy: str = "simple") -> AgreementResult:
+    """Replay every SimpleAgent seat of the decisions file through a fresh agent of `policy`.
 
     Each seat's agent is seeded from (game seed, agent id), so the result is reproducible.
     """
@@ -97,7 +102,8 @@ def measure_agreement(games_path: str | Path, decisions_path: str | Path) -> Agr
     agreed = stable_agreed = stable = total = 0
     for game_index, game in _games(Path(games_path), set(rows_by_game)):
         for row in rows_by_game[game_index]:
-            seat_agreed, seat_stable_agreed, seat_stable = _seat_agreement(game, game_index, row)
+            seat_agreed, seat_stable_agreed, seat_stable = _seat_agreement(game, game_index, row,
+                                                                           policy)
             agreed += seat_agreed
             stable_agreed += seat_stable_agreed
             stable += seat_stable

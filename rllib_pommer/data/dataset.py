@@ -20,7 +20,16 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from ..game.constants import NUM_ACTIONS
-from .schema import COLUMNS, COLUMNS_V1, SHARD_GLOB, Batch, decode, decode_columns, read_meta, to_batch
+from .schema import (
+    COLUMNS,
+    COLUMNS_V1,
+    SHARD_GLOB,
+    Batch,
+    decode,
+    decode_columns,
+    read_meta,
+    to_batch,
+)
 
 SHUFFLE_ROW_GROUPS = 8
 

@@ -3,12 +3,12 @@
 A row holds the agent's raw observation (the `Observation` fields, not the 19 expanded planes),
 the action it took, the keys that name it, and (schema 2) `action_counts`: how often SimpleAgent
 chose each of the 6 actions in the shard's `label_draws` independent draws from the same memory
-(all zero when the shard was collected without draws). The five 11x11 maps go into one fixed-size binary
-column `maps` (board, bomb_blast_strength, bomb_life, bomb_moving_direction, flame_life, each
-row-major), `position` (2 bytes) and `alive` (4 bytes) into small fixed-size binary columns, and
-the scalars into the narrowest integer types. Rows are sorted by (game, agent_id, step_count), so
-consecutive rows are one agent's consecutive views, which differ in a few cells: zstd then stores a
-sample in about 15 bytes.
+(all zero when the shard was collected without draws). The five 11x11 maps go into one
+fixed-size binary column `maps` (board, bomb_blast_strength, bomb_life, bomb_moving_direction,
+flame_life, each row-major), `position` (2 bytes), `alive` (4 bytes) and `action_counts` (6
+bytes) into small fixed-size binary columns, and the scalars into the narrowest integer types.
+Rows are sorted by (game, agent_id, step_count), so consecutive rows are one agent's consecutive
+views, which differ in a few cells: zstd then stores a sample in about 15 bytes.
 
 Every shard carries two key/value metadata entries: `rllib_pommer.schema_version` (SCHEMA_VERSION)
 and `rllib_pommer.shard`, a JSON object saying what the shard covers (see `ShardMeta`). Shards of

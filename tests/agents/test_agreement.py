@@ -4,22 +4,15 @@ from __future__ import annotations
 
 import gzip
 import json
-from pathlib import Path
 
 import pytest
 
 from rllib_pommer.agents.agreement import AgreementResult, format_line, measure_agreement
 
-REFERENCE_DIR = Path(__file__).resolve().parents[2].parent / "shared" / "reference"
-GAMES = REFERENCE_DIR / "games_public.jsonl.gz"
-DECISIONS = REFERENCE_DIR / "simpleagent_decisions_public.json"
-needs_reference = pytest.mark.skipif(
-    not (GAMES.exists() and DECISIONS.exists()),
-    reason=f"reference data not found in {REFERENCE_DIR} (../shared/reference is absent)",
-)
+from ..conftest import DECISIONS
+from ..conftest import PUBLIC_GAMES as GAMES
 
 
-@needs_reference
 def test_agreement_with_the_reference_meets_the_goals():
     result = measure_agreement(GAMES, DECISIONS)
     print(format_line(result))
@@ -38,7 +31,6 @@ def test_format_line():
     )
 
 
-@needs_reference
 def test_files_that_do_not_fit_raise_a_clear_error(tmp_path):
     """A decisions row whose digit count differs from the seat's alive steps is refused."""
     with gzip.open(GAMES, "rt", encoding="utf-8") as lines:
@@ -56,3 +48,15 @@ def test_files_that_do_not_fit_raise_a_clear_error(tmp_path):
     decisions.write_text(json.dumps({"mean_agreement": 0.5, "rows": [row]}))
     with pytest.raises(ValueError, match="no game_index 1"):
         measure_agreement(games, decisions)
+
+
+def test_any_policy_is_measured_by_the_same_ruler(tmp_path):
+    """`--policy`: a policy file that plays SimpleAgent scores SimpleAgent's own agreement, and
+    StaticAgent scores the share of recorded Stops, far below it."""
+    simple = measure_agreement(GAMES, DECISIONS)
+    copy = tmp_path / "my_simple.toml"
+    copy.write_text('kind = "simple"\n')
+    assert measure_agreement(GAMES, DECISIONS, policy=str(copy)) == simple
+    static = measure_agreement(GAMES, DECISIONS, policy="static")
+    assert static.decisions == simple.decisions
+    assert 0.05 < static.agreement < 0.5 < simple.agreement

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import gzip
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,7 +15,8 @@ from rllib_pommer.game.constants import ACTION_DC, ACTION_DR, Action, Item
 from rllib_pommer.game.observation import Observation, empty_observations
 from rllib_pommer.game.serialize import load_observation
 
-GAMES = Path("/work/shared/reference/games_public.jsonl.gz")
+from ..conftest import PUBLIC_GAMES as GAMES
+
 STOP, UP, DOWN, LEFT, RIGHT, BOMB = (int(a) for a in Action)
 ME = (5, 5)
 

@@ -5,7 +5,6 @@ from __future__ import annotations
 import gzip
 import json
 from itertools import islice
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -25,7 +24,8 @@ from rllib_pommer.game.constants import Action, Item
 from rllib_pommer.game.observation import Observation, empty_observations
 from rllib_pommer.game.serialize import load_observation
 
-GAMES = Path("/work/shared/reference/games_public.jsonl.gz")
+from ..conftest import PUBLIC_GAMES as GAMES
+
 SCRIPTED = [StaticAgent, RandomAgent, SimpleAgentNoBomb, SuicideTeammate, SmartRandom, SimpleAgent]
 WRAPPINGS = {
     "plain": lambda agent: agent,

@@ -25,15 +25,20 @@ from rllib_pommer.game.seeding import game_seeds
 from .conftest import TINY_GAMES, TINY_LABEL_DRAWS, TINY_SEED, TINY_SHARD_GAMES, read_all
 
 
+def _tiny(out, games: int, seed: int) -> Collection:
+    """A collection in the tiny dataset's shard size and label draws."""
+    return Collection(out, games, seed, TINY_SHARD_GAMES, TINY_LABEL_DRAWS)
+
+
 def _keys(table) -> np.ndarray:
     return np.stack([table.column(k).to_numpy().astype(np.int64)
                      for k in ("game", "step_count", "agent_id")], 1)
 
 
 def test_same_seed_same_dataset_whatever_the_workers(tiny_dataset, tmp_path):
-    Collection(tmp_path / "two", TINY_GAMES, TINY_SEED, TINY_SHARD_GAMES, TINY_LABEL_DRAWS).run(workers=2)
+    _tiny(tmp_path / "two", TINY_GAMES, TINY_SEED).run(workers=2)
     assert read_all(tmp_path / "two").equals(read_all(tiny_dataset))
-    Collection(tmp_path / "other", TINY_GAMES, TINY_SEED + 1, TINY_SHARD_GAMES, TINY_LABEL_DRAWS).run(workers=1)
+    _tiny(tmp_path / "other", TINY_GAMES, TINY_SEED + 1).run(workers=1)
     assert not read_all(tmp_path / "other").equals(read_all(tiny_dataset))
 
 
@@ -144,7 +149,7 @@ def test_rerun_keeps_finished_shards_and_clears_temporaries(tiny_dataset, tmp_pa
     kept_stamp = kept.stat().st_mtime_ns
     redone.unlink()
     (out / ".shard-000001.12345.tmp").write_bytes(b"half a shard")
-    collection = Collection(out, TINY_GAMES, TINY_SEED, TINY_SHARD_GAMES, TINY_LABEL_DRAWS)
+    collection = _tiny(out, TINY_GAMES, TINY_SEED)
     assert collection.missing == [1]
     collection.run(workers=1)
     assert kept.stat().st_mtime_ns == kept_stamp
@@ -154,12 +159,12 @@ def test_rerun_keeps_finished_shards_and_clears_temporaries(tiny_dataset, tmp_pa
 
 def test_shards_of_another_dataset_are_refused(tiny_dataset):
     with pytest.raises(ValueError, match="shard-000000.parquet.*seed 7.*seed 8"):
-        Collection(tiny_dataset, TINY_GAMES, TINY_SEED + 1, TINY_SHARD_GAMES, TINY_LABEL_DRAWS)
+        _tiny(tiny_dataset, TINY_GAMES, TINY_SEED + 1)
     with pytest.raises(ValueError, match="shard-000001.parquet.*games 3..5.*games 3..3"):
-        Collection(tiny_dataset, 4, TINY_SEED, TINY_SHARD_GAMES, TINY_LABEL_DRAWS)
+        _tiny(tiny_dataset, 4, TINY_SEED)
     with pytest.raises(ValueError, match="shard-000001.parquet.*no such shard"):
-        Collection(tiny_dataset, 3, TINY_SEED, TINY_SHARD_GAMES, TINY_LABEL_DRAWS)
-    assert Collection(tiny_dataset, 9, TINY_SEED, TINY_SHARD_GAMES, TINY_LABEL_DRAWS).missing == [2]  # grows
+        _tiny(tiny_dataset, 3, TINY_SEED)
+    assert _tiny(tiny_dataset, 9, TINY_SEED).missing == [2]  # grows
 
 
 def test_cli_summary_and_bad_arguments(tmp_path, capsys):

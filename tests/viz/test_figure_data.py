@@ -14,9 +14,7 @@ from rllib_pommer.viz.paper import PAPER_OPPONENTS, PAPER_TABLES
 from rllib_pommer.viz.tables import training_table
 from rllib_pommer.viz.training import rolling_mean, stage_figures, training_curve, write_summary
 
-from ..conftest import REPO_ROOT
-
-PAPER_TEX = REPO_ROOT.parent / "shared" / "docs" / "paper-meisheri-2019.tex"
+from ..conftest import PAPER_TABLES as PAPER_TEX
 
 
 def test_rolling_mean_weights_rows_by_their_episodes():
@@ -89,8 +87,6 @@ def test_heatmaps_mirror_every_seat_to_the_top_left():
 
 
 def test_paper_numbers_are_the_tex_tables():
-    if not PAPER_TEX.exists():
-        pytest.skip(f"{PAPER_TEX} is absent")
     tex = PAPER_TEX.read_text()
     our_name = {paper: ours for ours, paper in PAPER_OPPONENTS.items()}
     for team, label in (("imitation", "tab:results_imitation"), ("ppo", "tab:results_ppo")):
