@@ -27,6 +27,7 @@ from torch.utils.tensorboard import SummaryWriter
 from tqdm import tqdm
 
 from .data.dataset import Dataset, open_dataset
+from .data.schema import Batch
 from .features import featurize
 from .network import PommerNet
 
@@ -76,6 +77,24 @@ def soft_targets(actions: np.ndarray, counts: np.ndarray) -> np.ndarray:
 def _inputs(obs, cfg: BCConfig) -> torch.Tensor:
     x = torch.from_numpy(featurize(obs))
     return x.contiguous(memory_format=torch.channels_last) if cfg.channels_last else x
+
+
+def build_net(cfg: BCConfig) -> PommerNet:
+    net = PommerNet(dropout=cfg.dropout)
+    return net.to(memory_format=torch.channels_last) if cfg.channels_last else net
+
+
+def train_step(net: PommerNet, optimizer: torch.optim.Optimizer, batch: Batch,
+               cfg: BCConfig) -> tuple[torch.Tensor, torch.Tensor]:
+    """One update on `batch`; returns the loss and the (float32) logits."""
+    with torch.autocast("cpu", dtype=torch.bfloat16, enabled=cfg.bf16):
+        logits = net(_inputs(batch.obs, cfg)).float()
+    loss = F.cross_entropy(logits, torch.from_numpy(soft_targets(batch.action,
+                                                                 batch.action_counts)))
+    optimizer.zero_grad()
+    loss.backward()
+    optimizer.step()
+    return loss, logits
 
 
 def evaluate(net: PommerNet, data: Dataset, cfg: BCConfig) -> dict:
@@ -154,9 +173,7 @@ def train(cfg: BCConfig) -> dict:
     torch.manual_seed(cfg.seed)
     train_data, val_data = open_dataset(cfg.data).split(cfg.val_fraction, cfg.seed)
     cfg.training_dir.mkdir(parents=True, exist_ok=True)
-    net = PommerNet(dropout=cfg.dropout)
-    if cfg.channels_last:
-        net = net.to(memory_format=torch.channels_last)
+    net = build_net(cfg)
     optimizer = torch.optim.Adam(net.parameters(), lr=cfg.lr)
     checkpoint = _Checkpoint(cfg)
     start_epoch, start_batch, seconds = checkpoint.load(net, optimizer)
@@ -170,20 +187,15 @@ def train(cfg: BCConfig) -> dict:
         stream = train_data.iter_batches(cfg.batch_size, shuffle=True, seed=cfg.seed * 1000 + epoch)
         bar = tqdm(total=batches_per_epoch, initial=first, desc=f"epoch {epoch + 1}/{cfg.epochs}",
                    unit="batch")
-        for batch, (obs, actions, counts) in enumerate(stream):
+        for batch, samples in enumerate(stream):
             if batch >= batches_per_epoch:
                 break
             if batch < first:
                 continue
-            with torch.autocast("cpu", dtype=torch.bfloat16, enabled=cfg.bf16):
-                logits = net(_inputs(obs, cfg)).float()
-            loss = F.cross_entropy(logits, torch.from_numpy(soft_targets(actions, counts)))
-            optimizer.zero_grad()
-            loss.backward()
-            optimizer.step()
+            loss, logits = train_step(net, optimizer, samples, cfg)
             step = epoch * batches_per_epoch + batch
             if batch % 50 == 0:
-                accuracy = (logits.argmax(-1).numpy() == actions).mean()
+                accuracy = (logits.argmax(-1).numpy() == samples.action).mean()
                 writer.add_scalar("train/loss", loss.item(), step)
                 writer.add_scalar("train/accuracy", accuracy, step)
                 bar.set_postfix(loss=f"{loss.item():.3f}", acc=f"{accuracy:.3f}")

@@ -1,4 +1,4 @@
-"""`python -m rllib_pommer.bench engine|agents|train [--json]`: our speed, side by side.
+"""`python -m rllib_pommer.bench engine|agents|train|learn [--json]`: our speed, side by side.
 
 `engine` runs protocol (a) of tests/reference/README.md §4 on the single-game API and on the
 batched API: 200 Team games per run with precomputed uniform random actions (800 x 4 per game),
@@ -12,6 +12,11 @@ batched kernel deciding for all 80 seats of the 20 games in one call per step.
 
 `train` runs the quick curriculum's PPO config for a few iterations on the real env and on a
 zero-cost env with the same spaces, in one run, and prints env steps/s for both and their ratio.
+
+`learn` times the learners on one torch thread: the real RLlib PPO update (pi trainable, and pi
+frozen as in the value warm-up) beside PPO's update in plain eager float32 NCHW torch (the
+baseline), the real behaviour-cloning step beside its plain float32 NCHW form, and the float32
+FLOP bound of this core (FLOPs per PPO sample counted by torch, peak measured on a matrix product).
 
 Three runs each for engine and agents; min/median/max are printed. Pin the process to one core
 (`taskset -c 0`) to compare per core with the reference.
@@ -180,10 +185,29 @@ def bench_train() -> dict:
     return measure()
 
 
+def bench_learn() -> dict:
+    """Learner samples/s: RLlib PPO and BC, each beside its plain-torch baseline, and the bound."""
+    import torch
+
+    from . import learn_speed  # torch only for this target
+    from .rl.bench import bench_learner  # Ray only for this target
+
+    torch.set_num_threads(1)
+    torch.set_flush_denormal(True)
+    result = {"torch_threads": 1, **bench_learner()}
+    result["ppo_baseline_samples_per_s"] = learn_speed.plain_ppo_samples_per_s()
+    result.update(learn_speed.bc_speeds())
+    result.update(learn_speed.flop_bound())
+    result["ppo_speedup"] = result["ppo_samples_per_s"] / result["ppo_baseline_samples_per_s"]
+    result["bc_speedup"] = result["bc_samples_per_s"] / result["bc_baseline_samples_per_s"]
+    return {k: round(v, 3) if isinstance(v, float) else v for k, v in result.items()}
+
+
 TARGETS = {
     "engine": ("protocol (a): Team, 200 games x 3 runs", bench_engine),
     "agents": ("protocol (b): 4 SimpleAgents, 20 games x 3 runs", bench_agents),
     "train": ("PPO sampling + learning, real env vs zero-cost env", bench_train),
+    "learn": ("learner samples/s, one torch thread, beside plain-torch baselines", bench_learn),
 }
 
 

@@ -1,4 +1,10 @@
-"""How much the real game costs PPO: the same config on the real env and on a zero-cost twin.
+"""PPO's speed under RLlib: the whole loop (real env against a zero-cost twin) and the learner.
+
+`bench_learner` times the real learner alone: RLlib's `LearnerGroup.update` (learner connector
+with the advantage estimation, then `num_epochs` passes of minibatches of 128 through the real
+`PommerPPOModule`) on batches the real env runner sampled with the quick curriculum's config, with
+pi trainable and with pi frozen (the value warm-up). Samples/s count learner rows times epochs.
+
 
 `bench_train(iterations)` builds the PPO config of a curriculum (default "quick", first stage:
 all four agents exposed, SimpleAgent opponents as stateful fixed modules, the learner's filters)
@@ -17,12 +23,14 @@ from pathlib import Path
 
 import ray
 import torch
+from ray.rllib.execution.rollout_ops import synchronous_parallel_sample
 from ray.tune.registry import register_env
 
 from ..network import PommerNet
 from .config import build_config
 from .curriculum import load_curriculum
 from .env import ENV_NAME, PommeEnv
+from .rl_module import LEARNER
 from .training import init_ray
 
 ZERO_COST_ENV = "pommerman_team_zero_cost"
@@ -91,3 +99,47 @@ def bench_train(iterations: int = 3, curriculum: str = "quick") -> dict:
             "mean_episode_length": round(float(episode_length), 1),
             "real_env_steps_per_s": round(real, 1), "zero_cost_env_steps_per_s": round(zero, 1),
             "ratio": round(real / zero, 3)}
+
+
+def _learner_rows(episodes) -> int:
+    return sum(len(e) for episode in episodes for e in episode.agent_episodes.values()
+               if e.module_id == LEARNER)
+
+
+def _learner_samples_per_s(algo, frozen: bool, updates: int) -> float:
+    config = algo.config
+    algo.learner_group.foreach_learner(lambda l: l.module[LEARNER].set_pi_frozen(frozen))
+    samples = seconds = 0.0
+    for update in range(updates + 1):  # the first update is a warm-up
+        episodes = synchronous_parallel_sample(
+            worker_set=algo.env_runner_group, max_env_steps=config.total_train_batch_size,
+            _uses_new_env_runners=True)
+        start = time.perf_counter()
+        algo.learner_group.update(episodes=episodes, num_epochs=config.num_epochs,
+                                  minibatch_size=config.minibatch_size,
+                                  shuffle_batch_per_epoch=True)
+        if update:
+            seconds += time.perf_counter() - start
+            samples += _learner_rows(episodes) * config.num_epochs
+    return samples / seconds
+
+
+def bench_learner(updates: int = 3, curriculum: str = "quick") -> dict:
+    """Learner samples/s of the real RLlib update, pi trainable and pi frozen."""
+    started_ray = not ray.is_initialized()
+    if started_ray:
+        init_ray(None)
+    try:
+        with tempfile.TemporaryDirectory() as tmp:
+            weights = Path(tmp) / "pi.pt"
+            torch.save(PommerNet().state_dict(), weights)
+            algo = build_config(load_curriculum(curriculum), pi_weights=weights).build_algo()
+            try:
+                trainable = _learner_samples_per_s(algo, False, updates)
+                frozen = _learner_samples_per_s(algo, True, updates)
+            finally:
+                algo.stop()
+    finally:
+        if started_ray:
+            ray.shutdown()
+    return {"ppo_samples_per_s": trainable, "ppo_frozen_pi_samples_per_s": frozen}

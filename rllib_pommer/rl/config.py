@@ -27,6 +27,7 @@ from .connectors import LearnerFilters
 from .curriculum import Curriculum
 from .env import ENV_NAME
 from .fixed_modules import fixed_module_spec
+from .learner import PommerPPOLearner
 from .mapping import SeatMapping
 from .rl_module import LEARNER, PommerPPOModule
 
@@ -72,7 +73,8 @@ def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None
             entropy_coeff=0.0, clip_param=0.01, minibatch_size=128,
             lr=ppo["lr"], gamma=ppo["gamma"], lambda_=ppo["lambda"],
             num_epochs=ppo["num_epochs"], train_batch_size_per_learner=ppo["train_batch_size"],
-            vf_loss_coeff=ppo["vf_loss_coeff"], use_kl_loss=False, grad_clip=10.0)
+            vf_loss_coeff=ppo["vf_loss_coeff"], use_kl_loss=False, grad_clip=10.0,
+            learner_class=PommerPPOLearner)
         .callbacks(partial(CurriculumCallback, curriculum))
         .debugging(seed=seed)
     )
