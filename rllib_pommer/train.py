@@ -2,11 +2,16 @@
 
     python -m rllib_pommer.train [--curriculum NAME|FILE] [--out RUN_DIR] [--resume]
                                  [--address RAY_ADDRESS] [--pi-weights FILE]
+    python -m rllib_pommer.train --out RUN_DIR --pack
 
 Curricula are TOML files in `curriculum/` (default "quick"; "paper" is the paper's schedule). The
 run directory (default runs/<curriculum name>) gets RLlib checkpoints and TensorBoard logs;
 `--resume` continues an interrupted run from its last checkpoint. The arena plays a run's learner
 by its directory: `python -m rllib_pommer.evaluate --team runs/quick --vs static`.
+
+`--pack` shrinks a stopped run to what resuming needs (newest checkpoint, stage checkpoints, a
+small history.csv of the results), so it can be committed or copied and continued with
+`--resume` on another machine, at another path.
 """
 
 from __future__ import annotations
@@ -30,7 +35,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--num-env-runners", type=int, default=0,
                         help="remote env runners (0: sample in the driver; use more on a cluster)")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--pack", action="store_true",
+                        help="shrink the stopped run in --out for another machine, then exit")
     args = parser.parse_args(argv)
+    if args.pack:
+        return _pack(parser, args.out)
 
     # Imports after parsing, so --help is instant.
     import ray
@@ -59,6 +68,24 @@ def main(argv: list[str] | None = None) -> int:
               f"(checkpoint {checkpoint}); continue with --resume --out {out}")
         return 130
     print(f"done: {result.path} (checkpoint {checkpoint})")
+    return 0
+
+
+def _pack(parser: argparse.ArgumentParser, out: Path | None) -> int:
+    if out is None:
+        parser.error("--pack needs --out RUN_DIR")
+    from .rl.training import pack_run
+
+    try:
+        kept = pack_run(out)
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    size = sum(p.stat().st_size for p in out.rglob("*") if p.is_file())
+    for trial, checkpoint in kept.items():
+        print(f"{out / trial}: kept {checkpoint}, results folded into history.csv")
+    print(f"{out}: {size / 2**20:.1f} MiB; continue anywhere with "
+          f"`python -m rllib_pommer.train --curriculum NAME --out {out} --resume`")
     return 0
 
 

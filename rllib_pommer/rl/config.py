@@ -73,8 +73,8 @@ def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None
             entropy_coeff=0.0, clip_param=0.01, minibatch_size=128,
             lr=ppo["lr"], gamma=ppo["gamma"], lambda_=ppo["lambda"],
             num_epochs=ppo["num_epochs"], train_batch_size_per_learner=ppo["train_batch_size"],
-            vf_loss_coeff=ppo["vf_loss_coeff"], use_kl_loss=False, grad_clip=10.0,
-            learner_class=PommerPPOLearner)
+            vf_loss_coeff=ppo["vf_loss_coeff"], use_kl_loss=False, grad_clip=10.0)
+        .learners(learner_class=PommerPPOLearner)
         .callbacks(partial(CurriculumCallback, curriculum))
         .debugging(seed=seed)
     )

@@ -7,11 +7,19 @@ stops once the lifetime episode count reaches the curriculum's total. `resume` r
 experiment (`tune.Tuner.restore`): the trial continues from its last checkpoint, and since the
 stage follows from the restored lifetime episode count, stage and counters pick up where they
 were, also after a SIGKILL.
+
+A run outlives the machine it ran on through `pack_run`: with the run stopped, it folds the
+iterations' results into a small `history.csv` per trial (the curve and summary columns), keeps
+only the newest checkpoint and drops Tune's growing logs, so the folder (a few MB plus the stage
+checkpoints) can be committed, copied to a fresh clone anywhere and resumed there with `--resume`:
+Tune restores a moved experiment, and every path the run needs is rebuilt from the curriculum on
+the new machine.
 """
 
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import socket
 import time
@@ -21,6 +29,7 @@ import ray
 import torch
 from ray import tune
 
+from ..viz.training import HISTORY_FILE, write_summary
 from .config import build_config
 from .curriculum import Curriculum
 
@@ -156,3 +165,36 @@ def train(curriculum: Curriculum, out: Path, *, resume: bool = False,
     if result.error:
         raise RuntimeError(f"training failed: {result.error}")
     return result
+
+
+def _checkpoint_number(path: Path) -> int:
+    match = re.fullmatch(r"checkpoint_(\d+)", path.name)
+    return int(match.group(1)) if match else -1
+
+
+def pack_run(out: Path) -> dict:
+    """Shrink the stopped run in `out` to what resuming and the report need (see above); safe to
+    repeat. Returns what it kept: {trial name: newest checkpoint name}."""
+    out = Path(out)
+    if not tune.Tuner.can_restore(str(out)):
+        raise ValueError(f"--pack: no run in {out}")
+    kept = {}
+    for trial in sorted(p for p in out.iterdir() if (p / "params.json").is_file()):
+        checkpoints = sorted(trial.glob("checkpoint_*"), key=_checkpoint_number)
+        write_summary(trial, trial, HISTORY_FILE + ".tmp")
+        os.replace(trial / (HISTORY_FILE + ".tmp"), trial / HISTORY_FILE)
+        results = trial / "result.json"
+        if results.is_file():  # Tune reads the last result when it restores the trial
+            last = [line for line in results.read_text().splitlines() if line.strip()][-1:]
+            results.write_text("".join(f"{line}\n" for line in last))
+        for stale in [*checkpoints[:-1], *trial.glob("events.out.tfevents.*"),
+                      trial / "progress.csv"]:
+            if stale.is_dir():
+                shutil.rmtree(stale)
+            elif stale.exists():
+                stale.unlink()
+        kept[trial.name] = checkpoints[-1].name if checkpoints else None
+    for pattern in ("experiment_state-*.json", "basic-variant-state-*.json"):
+        for stale in sorted(out.glob(pattern))[:-1]:  # one per start; Tune reads the newest
+            stale.unlink()
+    return kept

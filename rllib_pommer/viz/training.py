@@ -1,7 +1,9 @@
 """Training curves from Tune trial directories, for the paper's Fig. 3.
 
 A trial directory holds `result.json` (one JSON result per line, flattened with "/" as Tune
-does; read first) or `progress.csv`, one row per training iteration. result.json comes first
+does; read first) or `progress.csv`, one row per training iteration, and, in a run packed to be
+carried to another machine (`rl.training.pack_run`), `history.csv`: the summary rows of the
+iterations before the pack, read before the others. result.json comes first
 because Tune's CSV appends a resumed run's rows in the new results' column order under the old
 header when the set of keys changed, which scrambles the columns. A resumed trial repeats the
 iterations after its checkpoint: the rows of the restored run replace the ones it discarded. A
@@ -44,7 +46,8 @@ LIFETIME_COLUMNS = ("env_runners/num_episodes_lifetime", "num_episodes_lifetime"
 PER_ITERATION_COLUMNS = ("env_runners/num_episodes", "episodes_this_iter")
 STAGE_COLUMNS = ("curriculum/iteration_stage_name", "curriculum/stage_name", "curriculum_stage",
                  "curriculum_kind")
-TRIAL_FILES = ("result.json", "progress.csv")
+HISTORY_FILE = "history.csv"
+TRIAL_FILES = ("result.json", "progress.csv", HISTORY_FILE)
 # Kept by `write_summary` beside the columns the curve is drawn from (what our trainer logs).
 SUMMARY_COLUMNS = (
     "training_iteration", "time_total_s", "env_runners/num_env_steps_sampled_lifetime",
@@ -107,12 +110,17 @@ def _json_rows(path: Path) -> list[dict]:
     return rows
 
 
+def _csv_rows(path: Path) -> list[dict]:
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
 def read_rows(trial: Path) -> list[dict]:
+    rows = _csv_rows(trial / HISTORY_FILE) if (trial / HISTORY_FILE).is_file() else []
     if (trial / "result.json").is_file():
-        rows = _json_rows(trial / "result.json")
-    else:
-        with open(trial / "progress.csv", newline="") as f:
-            rows = list(csv.DictReader(f))
+        rows += _json_rows(trial / "result.json")
+    elif (trial / "progress.csv").is_file():
+        rows += _csv_rows(trial / "progress.csv")
     return without_discarded(rows)
 
 
@@ -132,16 +140,16 @@ def read_trial(trial: Trial | Path) -> Trial:
     return trial if isinstance(trial, Trial) else Trial(Path(trial), read_rows(Path(trial)))
 
 
-def write_summary(trial: Trial | Path, out: Path) -> Path:
-    """`out`/progress.csv: the trial's rows (restores resolved), only the columns the curve is
-    drawn from and those of `SUMMARY_COLUMNS` it has."""
+def write_summary(trial: Trial | Path, out: Path, name: str = "progress.csv") -> Path:
+    """`out`/`name`: the trial's rows (restores resolved), only the columns the curve is drawn
+    from and those of `SUMMARY_COLUMNS` it has."""
     rows = read_trial(trial).rows
     curve = [_column(rows, names) for names in (RETURN_COLUMNS, LIFETIME_COLUMNS,
                                                 PER_ITERATION_COLUMNS)]
     columns = list(dict.fromkeys(c for c in [*SUMMARY_COLUMNS, *curve, *STAGE_COLUMNS]
                                  if c and any(c in row for row in rows)))
     out.mkdir(parents=True, exist_ok=True)
-    with open(out / "progress.csv", "w", newline="") as f:
+    with open(out / name, "w", newline="") as f:
         writer = csv.DictWriter(f, columns, extrasaction="ignore")
         writer.writeheader()
         writer.writerows(rows)

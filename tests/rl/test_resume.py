@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -15,6 +16,7 @@ import torch
 
 from rllib_pommer.learned import load_policy_net
 from rllib_pommer.rl.checkpoint_policy import load_checkpoint_net
+from rllib_pommer.viz.training import read_rows
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -64,3 +66,64 @@ def test_resume_after_sigkill(tmp_path, pi_weights):
     warmup_end = load_checkpoint_net(out / "stages" / "1-warmup").state_dict()
     start = load_policy_net(pi_weights).state_dict()
     assert all(torch.equal(warmup_end[key], start[key]) for key in start)
+
+
+def _wait_for(predicate, process, seconds: float, what: str) -> None:
+    deadline = time.monotonic() + seconds
+    while not predicate():
+        assert process.poll() is None, f"training ended before {what}"
+        assert time.monotonic() < deadline, f"timed out waiting for {what}"
+        time.sleep(0.2)
+
+
+def _interrupt(process) -> int:
+    process.send_signal(signal.SIGINT)  # as Ctrl-C: Tune checkpoints and the CLI exits 130
+    try:
+        return process.wait(timeout=120)
+    finally:
+        if process.poll() is None:
+            os.killpg(process.pid, signal.SIGKILL)
+
+
+def test_a_packed_run_resumes_at_another_path(tmp_path, pi_weights):
+    """Stop a run, pack it, move it to another folder (as a fresh clone would hold it) and resume
+    it from another working directory: it goes on from its checkpoint, same lifetime episode
+    count and stage, and its history reads as one run."""
+    curriculum = tmp_path / "long_smoke.toml"
+    smoke = (REPO / "curriculum" / "smoke.toml").read_text()
+    assert 'opponent = "static"\nepisodes = 12' in smoke
+    curriculum.write_text(smoke.replace('opponent = "static"\nepisodes = 12',
+                                        'opponent = "static"\nepisodes = 100000'))
+    first = tmp_path / "first" / "run"
+    process = subprocess.Popen(_train(first, pi_weights, "--curriculum", str(curriculum)),
+                               cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                               start_new_session=True)
+    _wait_for(lambda: list(first.glob("*/checkpoint_000002")), process, 240, "3 iterations")
+    assert _interrupt(process) == 130
+    packed = subprocess.run([sys.executable, "-m", "rllib_pommer.train", "--out", str(first),
+                             "--pack"], cwd=REPO, capture_output=True, text=True, timeout=120)
+    assert packed.returncode == 0, packed.stderr[-2000:]
+    (trial,) = [p for p in first.iterdir() if p.is_dir() and p.name.startswith("PPO_")]
+    assert len(list(trial.glob("checkpoint_*"))) == 1 and (trial / "history.csv").is_file()
+    assert not list(trial.glob("events.out.tfevents.*"))
+    before = read_rows(trial)
+    moved = tmp_path / "clone" / "campaign" / "run"
+    shutil.copytree(first, moved)
+    shutil.rmtree(tmp_path / "first")  # nothing may point back to the old place
+    process = subprocess.Popen(_train(moved, pi_weights, "--curriculum", str(curriculum),
+                                      "--resume"),
+                               cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                               start_new_session=True)
+    moved_trial = moved / trial.name
+    _wait_for(lambda: len(read_rows(moved_trial)) >= len(before) + 2, process, 240,
+              "2 iterations after the resume")
+    _interrupt(process)
+    rows = read_rows(moved_trial)
+    iterations = [int(float(r["training_iteration"])) for r in rows]
+    assert iterations == list(range(1, len(rows) + 1))  # one run, no gap, no restart
+    last, resumed = before[-1], rows[len(before)]
+    lifetime = int(float(last["env_runners/num_episodes_lifetime"]))
+    assert (resumed["env_runners/num_episodes_lifetime"] - resumed["env_runners/num_episodes"]
+            == lifetime > 12)  # past the warm-up's 12 episodes: in the second stage
+    assert resumed["curriculum/iteration_stage_name"] == last[
+        "curriculum/iteration_stage_name"] == "static"
