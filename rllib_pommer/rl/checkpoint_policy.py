@@ -6,6 +6,11 @@ checkpoint folder, a Tune trial folder (its latest `checkpoint_*` is used) or a 
 one or more trials (the newest checkpoint among them). The learner's pi weights are read straight
 from the module's saved state, without rebuilding the RLlib module (which would want the imitation
 weights it started from), into a `PommerNet`, and played by `learned.LearnedPolicy`.
+
+A checkpoint folder may come from anyone, and a pickle can name any callable to run while it
+loads: the module state is read by `StateUnpickler`, which builds dicts and numpy arrays and
+refuses every other global, so a crafted `module_state.pkl` fails with an error instead of
+running code.
 """
 
 from __future__ import annotations
@@ -37,17 +42,51 @@ def latest_checkpoint(path: str | Path) -> Path:
     return max(found, key=lambda p: (p.stat().st_mtime, p.name))
 
 
+class StateUnpickler(pickle.Unpickler):
+    """Unpickles what RLlib writes for a torch module's state (an OrderedDict of numpy arrays)
+    and nothing else."""
+
+    ALLOWED = {
+        ("collections", "OrderedDict"),
+        ("numpy", "dtype"),
+        ("numpy", "ndarray"),
+        ("numpy._core.numeric", "_frombuffer"),
+        ("numpy.core.numeric", "_frombuffer"),
+        ("numpy._core.multiarray", "_reconstruct"),
+        ("numpy.core.multiarray", "_reconstruct"),
+    }
+
+    def find_class(self, module: str, name: str):
+        if (module, name) not in self.ALLOWED:
+            raise pickle.UnpicklingError(f"refused global {module}.{name} (a module state holds "
+                                         "only dicts and numpy arrays)")
+        return super().find_class(module, name)
+
+
+def read_module_state(state_file: Path) -> dict:
+    """The saved state of an RLlib module, or a ValueError naming the file and the problem."""
+    try:
+        with state_file.open("rb") as f:
+            state = StateUnpickler(f).load()
+    except (pickle.UnpicklingError, EOFError, ValueError, TypeError, AttributeError,
+            IndexError) as exc:
+        raise ValueError(f"{state_file}: not a readable module state ({exc})") from None
+    if not isinstance(state, dict):
+        raise ValueError(f"{state_file}: not a readable module state (a "
+                         f"{type(state).__name__}, not a dict)")
+    return state
+
+
 def load_checkpoint_net(path: str | Path) -> PommerNet:
     """The learner's policy network (eval mode) from a checkpoint, trial or run folder."""
     state_file = latest_checkpoint(path) / MODULE_STATE
-    with state_file.open("rb") as f:
-        state = pickle.load(f)
-    pi = {key.removeprefix("pi."): torch.as_tensor(value) for key, value in state.items()
-          if key.startswith("pi.")}
+    state = read_module_state(state_file)
+    pi = {str(key).removeprefix("pi."): torch.as_tensor(value) for key, value in state.items()
+          if str(key).startswith("pi.")}
     net = PommerNet()
     try:
         net.load_state_dict(pi)
-    except RuntimeError as exc:
+    except (RuntimeError, TypeError) as exc:
         raise ValueError(f"{state_file}: learner weights do not fit PommerNet ({exc})") from None
     return net.eval()
 

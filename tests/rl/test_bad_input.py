@@ -2,10 +2,15 @@
 
 from __future__ import annotations
 
+import collections
+import os
+import pickle
 import socket
 
+import numpy as np
 import pytest
 
+from rllib_pommer.rl.checkpoint_policy import MODULE_STATE, load_checkpoint_net
 from rllib_pommer.rl.config import build_config
 from rllib_pommer.rl.curriculum import load_curriculum
 from rllib_pommer.rl.training import init_ray
@@ -68,3 +73,33 @@ def test_a_cluster_that_wants_a_token_says_how_to_give_it(monkeypatch):
         with pytest.raises(ValueError, match="RAY_AUTH_MODE=token") as info:
             init_ray(f"127.0.0.1:{head.getsockname()[1]}")
     assert "wants a token" in str(info.value)
+
+
+class _RunsACommand:
+    """Unpickling this calls os.system: what a crafted checkpoint would do."""
+
+    def __init__(self, marker):
+        self.marker = marker
+
+    def __reduce__(self):
+        return os.system, (f"touch {self.marker}",)
+
+
+@pytest.mark.parametrize("content, words", [
+    (lambda tmp: pickle.dumps({"pi.x": _RunsACommand(tmp / "pwned")}), ["refused global",
+                                                                        "system"]),
+    (lambda tmp: pickle.dumps(collections.OrderedDict(a=np.zeros(3)))[:20], ["module state"]),
+    (lambda tmp: b"", ["module state"]),
+    (lambda tmp: pickle.dumps([np.zeros(3)]), ["list, not a dict"]),
+    (lambda tmp: pickle.dumps({"pi.convs.0.weight": np.zeros(3)}), ["do not fit PommerNet"]),
+])
+def test_a_checkpoint_never_runs_code_and_bad_states_are_named(tmp_path, content, words):
+    state_file = tmp_path / "ckpt" / MODULE_STATE
+    state_file.parent.mkdir(parents=True)
+    state_file.write_bytes(content(tmp_path))
+    with pytest.raises(ValueError) as info:
+        load_checkpoint_net(tmp_path / "ckpt")
+    assert str(state_file) in str(info.value)
+    for word in words:
+        assert word in str(info.value)
+    assert not (tmp_path / "pwned").exists()
