@@ -15,6 +15,7 @@ skipping the batches already trained gives the same stream an uninterrupted run 
 from __future__ import annotations
 
 import json
+import math
 import os
 import time
 from dataclasses import asdict, dataclass
@@ -42,6 +43,10 @@ class BCConfig:
     epochs: int = 1
     batch_size: int = 512
     lr: float = 1e-3
+    # Cosine decay of the learning rate to `lr * final_lr_fraction` over all planned batches;
+    # the rate follows from the batch count alone, so a resumed run continues the same schedule.
+    lr_decay: bool = True
+    final_lr_fraction: float = 0.05
     dropout: float = 0.2
     val_fraction: float = 0.05
     seed: int = 0
@@ -95,6 +100,14 @@ def train_step(net: PommerNet, optimizer: torch.optim.Optimizer, batch: Batch,
     loss.backward()
     optimizer.step()
     return loss, logits
+
+
+def learning_rate(cfg: BCConfig, step: int, total_steps: int) -> float:
+    if not cfg.lr_decay or total_steps <= 1:
+        return cfg.lr
+    progress = min(step / (total_steps - 1), 1.0)
+    floor = cfg.lr * cfg.final_lr_fraction
+    return floor + (cfg.lr - floor) * 0.5 * (1 + math.cos(math.pi * progress))
 
 
 def evaluate(net: PommerNet, data: Dataset, cfg: BCConfig) -> dict:
@@ -192,8 +205,10 @@ def train(cfg: BCConfig) -> dict:
                 break
             if batch < first:
                 continue
-            loss, logits = train_step(net, optimizer, samples, cfg)
             step = epoch * batches_per_epoch + batch
+            for group in optimizer.param_groups:
+                group["lr"] = learning_rate(cfg, step, cfg.epochs * batches_per_epoch)
+            loss, logits = train_step(net, optimizer, samples, cfg)
             if batch % 50 == 0:
                 accuracy = (logits.argmax(-1).numpy() == samples.action).mean()
                 writer.add_scalar("train/loss", loss.item(), step)

@@ -29,6 +29,7 @@ _HELP = {
     "threads": "torch threads", "checkpoint_every": "batches between training checkpoints",
     "channels_last": "channels-last tensors (faster on CPU)",
     "bf16": "bfloat16 autocast in training (faster on CPUs with AVX-512 BF16)",
+    "lr_decay": "cosine decay of the learning rate over the planned batches",
 }
 
 

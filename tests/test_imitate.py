@@ -107,3 +107,12 @@ def test_bad_weights_files_are_named(tmp_path):
     torch.save(PommerNet(num_outputs=1).state_dict(), wrong)
     with pytest.raises(ValueError, match="value_net.pt: weights do not fit PommerNet"):
         load_policy_net(wrong)
+
+
+def test_the_learning_rate_decays_by_a_cosine_to_its_floor(tmp_path):
+    cfg = BCConfig(data=tmp_path, out=tmp_path, lr=1e-3, final_lr_fraction=0.1)
+    rates = [bc.learning_rate(cfg, step, 101) for step in range(101)]
+    assert rates[0] == pytest.approx(1e-3) and rates[-1] == pytest.approx(1e-4)
+    assert rates[50] == pytest.approx(5.5e-4) and all(np.diff(rates) <= 0)
+    flat = BCConfig(data=tmp_path, out=tmp_path, lr_decay=False)
+    assert bc.learning_rate(flat, 100, 101) == flat.lr
