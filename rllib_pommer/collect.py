@@ -6,6 +6,10 @@ counts over K tie-breaking draws), one row per (game, step, agent), to Parquet
 shards DIR/shard-NNNNNN.parquet of --shard-games games each (schema: rllib_pommer/data/schema.py;
 read them with rllib_pommer.data.dataset.open_dataset). Same --seed, same dataset, whatever
 --workers. Re-running the same command resumes: finished shards are kept, the rest are played.
+
+With --dagger POLICY, the learned policy plays instead (its team on seats {0, 2} and {1, 3} in
+turn, against the --vs opponents in turn) and only its decisions are recorded, each labelled with
+what SimpleAgent would have done there (rllib_pommer/data/dagger.py).
 """
 
 from __future__ import annotations
@@ -17,7 +21,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from .data.collector import SHARD_GAMES, Collection, ShardResult
+from .data.collector import SHARD_GAMES, Collection, Dagger, ShardResult
 
 
 def _positive(text: str) -> int:
@@ -39,10 +43,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--label-draws", type=int, default=0, metavar="K",
                         help="also record SimpleAgent's action counts over K draws from the same "
                              "memory per decision, the soft targets of imitation (0..255)")
+    parser.add_argument("--dagger", metavar="POLICY",
+                        help="DAgger data: this learned policy plays (greedy) and SimpleAgent "
+                             "labels the states it visits (needs --label-draws)")
+    parser.add_argument("--vs", default="simple,static",
+                        help="DAgger opponents, comma-separated, taken in turn (default: "
+                             "%(default)s)")
     args = parser.parse_args(argv)
+    dagger = Dagger(args.dagger, tuple(args.vs.split(","))) if args.dagger else None
     try:
         collection = Collection(args.out, args.games, args.seed, args.shard_games,
-                                args.label_draws)
+                                args.label_draws, dagger)
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

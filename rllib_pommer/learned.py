@@ -13,14 +13,15 @@ The arena uses this to batch inference across the games a worker plays in lockst
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from functools import cache
 from pathlib import Path
 
 import numpy as np
 import torch
 
-from .agents.registry import PolicySpec, register_kind
+from .agents.base import innermost
+from .agents.registry import PolicySpec, make_agent, register_kind, resolve_policy
 from .features import featurize
 from .game.observation import Observation
 from .network import PommerNet
@@ -103,3 +104,16 @@ def _learned_agent(spec: PolicySpec) -> LearnedAgent:
 
 
 register_kind("learned", _learned_agent)
+
+
+def greedy_actor(name_or_path: str) -> tuple[Callable[[Observation], np.ndarray], Path]:
+    """The most likely actions (B,) of a learned policy for observations (B,), batched, and the
+    weights file it reads (for a `rllib_checkpoint` policy, the checkpoint's module state)."""
+    spec = resolve_policy(name_or_path)
+    agent = innermost(make_agent(name_or_path))
+    if not isinstance(agent, LearnedAgent) or spec.filters:
+        raise ValueError(f"policy {name_or_path!r} is not a plain learned policy "
+                         f"(kind {spec.kind!r}, filters {list(spec.filters)})")
+    weights = (spec.path.parent / spec.params["weights"] if spec.kind == "learned"
+               else Path(spec.params["checkpoint"]))
+    return (lambda obs: agent.policy.probabilities(obs).argmax(-1)), weights.resolve()

@@ -12,6 +12,7 @@ may write into a directory at a time.
 from __future__ import annotations
 
 import ctypes
+import hashlib
 import os
 import signal
 import sys
@@ -21,8 +22,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..game.constants import TEAM
+from .dagger import OPPONENTS, play_dagger_games
 from .expert import play_games
-from .schema import SHARD_GLOB, ShardMeta, encode, read_meta, shard_name, write_table
+from .schema import SHARD_GLOB, Samples, ShardMeta, encode, read_meta, shard_name, write_table
 
 SHARD_GAMES = 128  # ~110,000 samples: a worker peaks ~300 MB above its base; ~1.7 MB on disk
 TEMP_GLOB = ".shard-*.tmp"
@@ -35,15 +37,54 @@ class ShardResult:
     bytes: int
 
 
-def plan_shards(games: int, seed: int, shard_games: int,
-                label_draws: int = 0) -> list[ShardMeta]:
+@dataclass(frozen=True)
+class Dagger:
+    """Who plays a DAgger dataset: the clone (a learned policy name or file) and its opponents."""
+
+    policy: str
+    opponents: tuple[str, ...]
+
+
+def _sha256(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def plan_shards(games: int, seed: int, shard_games: int, label_draws: int = 0,
+                dagger: Dagger | None = None) -> list[ShardMeta]:
     if games <= 0 or shard_games <= 0:
         raise ValueError(f"games and shard_games must be positive, got {games}, {shard_games}")
     if not 0 <= label_draws < 256:
         raise ValueError(f"label_draws must be in 0..255, got {label_draws}")
+    players = {}
+    if dagger is not None:
+        if not label_draws:
+            raise ValueError("DAgger data need --label-draws (the expert's labels)")
+        unknown = sorted(set(dagger.opponents) - set(OPPONENTS))
+        if unknown or not dagger.opponents:
+            raise ValueError(f"DAgger opponents {list(dagger.opponents)}: each must be one of "
+                             f"{list(OPPONENTS)}")
+        from ..learned import greedy_actor  # torch, for DAgger only
+
+        _, weights = greedy_actor(dagger.policy)
+        players = {"agents": "dagger", "policy": dagger.policy,
+                   "policy_sha256": _sha256(weights), "opponents": ",".join(dagger.opponents)}
     return [ShardMeta(seed, first, min(first + shard_games, games), shard_games, TEAM.board_size,
-                      label_draws=label_draws)
+                      label_draws=label_draws, **players)
             for first in range(0, games, shard_games)]
+
+
+def _play(meta: ShardMeta) -> Samples:
+    games = range(meta.first_game, meta.stop_game)
+    if meta.agents != "dagger":
+        return play_games(meta.seed, games, label_draws=meta.label_draws)
+    from ..learned import greedy_actor  # torch, for DAgger only
+
+    act, weights = greedy_actor(meta.policy)
+    if _sha256(weights) != meta.policy_sha256:
+        raise ValueError(f"{meta.policy}: its weights {weights} changed since this DAgger "
+                         "dataset was planned")
+    return play_dagger_games(meta.seed, games, act, tuple(meta.opponents.split(",")),
+                             meta.label_draws)
 
 
 def _fsync_dir(directory: Path) -> None:
@@ -56,8 +97,7 @@ def _fsync_dir(directory: Path) -> None:
 
 def write_shard(out_dir: Path, index: int, meta: ShardMeta) -> ShardResult:
     """Play the shard's games and publish the shard atomically under its final name."""
-    samples = play_games(meta.seed, range(meta.first_game, meta.stop_game),
-                         label_draws=meta.label_draws)
+    samples = _play(meta)
     table = encode(samples, meta)
     final = out_dir / shard_name(index)
     temp = out_dir / f".{final.stem}.{os.getpid()}.tmp"
@@ -98,9 +138,10 @@ class Collection:
     """One dataset's shards in `out_dir`: which are finished, and writing the missing ones."""
 
     def __init__(self, out_dir: Path, games: int, seed: int = 0,
-                 shard_games: int = SHARD_GAMES, label_draws: int = 0):
+                 shard_games: int = SHARD_GAMES, label_draws: int = 0,
+                 dagger: Dagger | None = None):
         self.out_dir = out_dir
-        self.plan = plan_shards(games, seed, shard_games, label_draws)
+        self.plan = plan_shards(games, seed, shard_games, label_draws, dagger)
         out_dir.mkdir(parents=True, exist_ok=True)
         self.results = finished_shards(out_dir, self.plan)
 

@@ -21,7 +21,7 @@ from .schema import Samples
 BATCH_GAMES = 64  # games stepped together, amortising the per-step Python overhead
 
 
-def _reset_memory(memory: SimpleMemory, slot: int, rngs: list[np.random.Generator]) -> None:
+def reset_memory(memory: SimpleMemory, slot: int, rngs: list[np.random.Generator]) -> None:
     """Fresh memory rows for the four seats of `slot`, each seeded from its own generator."""
     for seat, rng in enumerate(rngs):
         for field, fresh in zip(memory, new_memory(1, rng), strict=True):
@@ -49,7 +49,7 @@ def play_games(seed: int, games: range, batch_games: int = BATCH_GAMES,
         for slot, game in zip(slots, upcoming, strict=False):
             slot_seed[slot], rngs = game_seeds(seed, game)
             slot_game[slot] = game
-            _reset_memory(memory, slot, rngs)
+            reset_memory(memory, slot, rngs)
             started.append(slot)
         if started:
             engine.reset(slot_seed[started], started)

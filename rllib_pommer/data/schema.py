@@ -92,9 +92,16 @@ class ShardMeta:
     game_type: str = "team"
     agents: str = "simple"
     label_draws: int = 0  # SimpleAgent draws behind each row's action_counts (0: none)
+    # DAgger shards (agents = "dagger"): the clone that played, the sha256 of its weights and
+    # its opponents (comma-separated); see data/dagger.py.
+    policy: str = ""
+    policy_sha256: str = ""
+    opponents: str = ""
 
     def __str__(self) -> str:
-        return (f"{self.agents} {self.game_type} games {self.first_game}..{self.stop_game - 1} "
+        players = (f"dagger ({self.policy} {self.policy_sha256[:8]} vs {self.opponents})"
+                   if self.agents == "dagger" else self.agents)
+        return (f"{players} {self.game_type} games {self.first_game}..{self.stop_game - 1} "
                 f"of seed {self.seed} in shards of {self.shard_games}")
 
 

@@ -1,0 +1,90 @@
+"""DAgger play: the clone acts, SimpleAgent labels the states the clone visits.
+
+Behaviour cloning learns from SimpleAgent's own games, but the clone, once it errs, reaches states
+SimpleAgent seldom visits and has never been shown what to do there. DAgger (Ross, Gordon and
+Bagnell 2011) closes that gap: the clone plays, and the expert says what it would have done at
+every state the clone visited; those labels join the dataset and the clone is trained again.
+
+Game g of a DAgger shard is played as in the arena (`game_seeds(seed, g)`): the clone's team takes
+seats {0, 2} or {1, 3} in turn, against `opponents[g % len(opponents)]` ("simple" or "static").
+Each clone seat has a shadow SimpleAgent memory, seeded from the seat's stream, that decides at
+every step as if it were playing: its decision is the sample's recorded action (so the shadow's
+memory of where it wandered and which way it approached follows the clone's trajectory), and its
+counts over `label_draws` further draws are the soft target. Only the clone's decisions are
+recorded; the games depend only on (seed, g, the clone's weights).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from ..agents.simple import new_memory, simple_action_counts, simple_actions
+from ..game.constants import NUM_AGENTS, TEAM, Action
+from ..game.engine import Games
+from ..game.observation import Observation
+from ..game.seeding import game_seeds
+from .expert import BATCH_GAMES, reset_memory
+from .schema import Samples
+
+OPPONENTS = ("simple", "static")
+TEAM_SEATS = ((0, 2), (1, 3))
+
+Actor = Callable[[Observation], np.ndarray]  # observations (B,) -> actions (B,)
+
+
+def seating(game: int, opponents: tuple[str, ...]) -> tuple[str, tuple[int, int]]:
+    """The opponent and the clone's seats of game `game`."""
+    cycle = len(opponents)
+    return opponents[game % cycle], TEAM_SEATS[(game // cycle) % 2]
+
+
+def play_dagger_games(seed: int, games: range, act: Actor, opponents: tuple[str, ...],
+                      label_draws: int, batch_games: int = BATCH_GAMES) -> Samples:
+    """The clone's decisions in games `games`, labelled by its shadow SimpleAgents."""
+    unknown = sorted(set(opponents) - set(OPPONENTS))
+    if unknown or not opponents:
+        raise ValueError(f"DAgger opponents must be among {list(OPPONENTS)}, got {opponents}")
+    if label_draws <= 0:
+        raise ValueError(f"DAgger needs label draws, got {label_draws}")
+    engine = Games(min(batch_games, len(games)), TEAM)
+    slots = engine.num_games
+    memory = new_memory(NUM_AGENTS * slots, np.random.default_rng(0))  # reseeded per game
+    slot_game = np.full(slots, -1, np.int64)
+    slot_seed = np.zeros(slots, np.int64)
+    clone_seat = np.zeros((slots, NUM_AGENTS), bool)
+    simple_seat = np.zeros((slots, NUM_AGENTS), bool)
+    upcoming = iter(games)
+
+    def start(free) -> None:
+        started = []
+        for slot, game in zip(free, upcoming, strict=False):
+            slot_seed[slot], rngs = game_seeds(seed, game)
+            slot_game[slot] = game
+            reset_memory(memory, slot, rngs)
+            opponent, seats = seating(game, opponents)
+            clone_seat[slot] = [s in seats for s in range(NUM_AGENTS)]
+            simple_seat[slot] = ~clone_seat[slot] & (opponent == "simple")
+            started.append(slot)
+        if started:
+            engine.reset(slot_seed[started], started)
+        slot_game[list(free)[len(started):]] = -1
+
+    recorded: list[Samples] = []
+    start(range(slots))
+    while (slot_game >= 0).any():
+        active = (engine.alive & ~engine.done[:, None]).ravel()
+        rows = engine.obs.agent_rows()
+        clone = np.flatnonzero(active & clone_seat.ravel())
+        counts = simple_action_counts(rows, memory, label_draws, active & clone_seat.ravel())
+        labels = simple_actions(rows, memory, active & (clone_seat | simple_seat).ravel())
+        actions = labels.copy()
+        actions[~simple_seat.ravel()] = int(Action.STOP)
+        if len(clone):
+            actions[clone] = act(rows.select(clone))
+        recorded.append(Samples(rows, labels, np.repeat(slot_game, NUM_AGENTS),
+                                np.repeat(slot_seed, NUM_AGENTS), counts).take(clone))
+        engine.step(actions.reshape(-1, NUM_AGENTS))
+        start(np.flatnonzero(engine.done & (slot_game >= 0)))
+    return Samples.concatenate(recorded)
