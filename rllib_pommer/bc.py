@@ -30,6 +30,7 @@ from tqdm import tqdm
 from .data.dataset import Dataset, open_dataset
 from .data.schema import Batch
 from .features import featurize
+from .learned import load_policy_net
 from .network import PommerNet
 
 WEIGHTS_FILE = "pi.pt"
@@ -38,7 +39,7 @@ METRICS_FILE = "metrics.json"
 
 @dataclass
 class BCConfig:
-    data: Path
+    data: list[Path]  # one or more dataset folders (expert games, DAgger rounds)
     out: Path
     epochs: int = 1
     batch_size: int = 512
@@ -58,6 +59,12 @@ class BCConfig:
     # autocast 2.2x the samples/s of plain float32 NCHW. Validation always runs in float32.
     channels_last: bool = True
     bf16: bool = True
+    init: Path | None = None  # start from these pi weights (fine-tuning, e.g. after DAgger)
+
+    def __post_init__(self):
+        if isinstance(self.data, (str, Path)):
+            self.data = [self.data]
+        self.data = [Path(d) for d in self.data]
 
     @property
     def training_dir(self) -> Path:
@@ -184,12 +191,14 @@ def train(cfg: BCConfig) -> dict:
     """Train (or resume), then write `pi.pt` and `metrics.json` into `cfg.out`."""
     set_cpu_options(cfg.threads)
     torch.manual_seed(cfg.seed)
-    train_data, val_data = open_dataset(cfg.data).split(cfg.val_fraction, cfg.seed)
+    train_data, val_data = open_dataset(*cfg.data).split(cfg.val_fraction, cfg.seed)
     cfg.training_dir.mkdir(parents=True, exist_ok=True)
     net = build_net(cfg)
     optimizer = torch.optim.Adam(net.parameters(), lr=cfg.lr)
     checkpoint = _Checkpoint(cfg)
     start_epoch, start_batch, seconds = checkpoint.load(net, optimizer)
+    if cfg.init is not None and (start_epoch, start_batch) == (0, 0):
+        net.load_state_dict(load_policy_net(cfg.init).state_dict())
     writer = SummaryWriter(str(cfg.training_dir / "tensorboard"))
     batches_per_epoch = train_data.num_samples // cfg.batch_size + 1
     if cfg.max_batches_per_epoch is not None:
@@ -235,7 +244,7 @@ def train(cfg: BCConfig) -> dict:
         **{f"validation_{name}": val[name] for name in ("mode_accuracy", "expected_agreement")
            if name in val},
         "batches_per_epoch": batches_per_epoch, "training_seconds": time.perf_counter() - started,
-        "config": {k: str(v) if isinstance(v, Path) else v for k, v in asdict(cfg).items()},
+        "config": json.loads(json.dumps(asdict(cfg), default=str)),
     }
     cfg.out.mkdir(parents=True, exist_ok=True)
     _save_atomic({k: v.contiguous() for k, v in net.state_dict().items()}, cfg.out / WEIGHTS_FILE)

@@ -25,7 +25,8 @@ def write_policy_file(out: Path, description: str) -> Path:
 
 
 _HELP = {
-    "data": "dataset folder of shards", "out": "policy folder to write",
+    "data": "dataset folder(s) of shards", "out": "policy folder to write",
+    "init": "pi weights to start from (fine-tuning)",
     "threads": "torch threads", "checkpoint_every": "batches between training checkpoints",
     "channels_last": "channels-last tensors (faster on CPU)",
     "bf16": "bfloat16 autocast in training (faster on CPUs with AVX-512 BF16)",
@@ -41,7 +42,9 @@ def _options(parser: argparse.ArgumentParser) -> None:
         hint = hints[field.name]
         help_text = _HELP.get(field.name)
         if field.default is dataclasses.MISSING:
-            parser.add_argument(flag, type=Path, required=True, help=help_text)
+            many = typing.get_origin(hint) is list
+            parser.add_argument(flag, type=Path, required=True, help=help_text,
+                                nargs="+" if many else None)
         elif hint is bool:
             parser.add_argument(flag, action=argparse.BooleanOptionalAction,
                                 default=field.default, help=help_text)
@@ -62,7 +65,8 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    policy = write_policy_file(args.out, f"Behaviour cloning of SimpleAgent ({args.data.name})")
+    names = ", ".join(d.name for d in cfg.data)
+    policy = write_policy_file(args.out, f"Behaviour cloning of SimpleAgent ({names})")
     print(f"validation accuracy {metrics['validation_accuracy']:.4f}, "
           f"loss {metrics['validation_loss']:.4f}; weights {args.out / WEIGHTS_FILE}, "
           f"policy file {policy}")

@@ -116,3 +116,18 @@ def test_the_learning_rate_decays_by_a_cosine_to_its_floor(tmp_path):
     assert rates[50] == pytest.approx(5.5e-4) and all(np.diff(rates) <= 0)
     flat = BCConfig(data=tmp_path, out=tmp_path, lr_decay=False)
     assert bc.learning_rate(flat, 100, 101) == flat.lr
+
+
+def test_init_starts_from_given_weights_and_several_datasets_train_together(dataset, tmp_path):
+    start = PommerNet()
+    torch.nn.init.constant_(start.head[-1].bias, 0.5)
+    torch.save(start.state_dict(), tmp_path / "start.pt")
+    cfg = _config([dataset, dataset], tmp_path / "tuned", init=tmp_path / "start.pt", lr=1e-12,
+                  max_batches_per_epoch=2)
+    metrics = train(cfg)
+    tuned = torch.load(cfg.out / bc.WEIGHTS_FILE, weights_only=True)
+    assert torch.allclose(tuned["head.3.bias"], torch.full((6,), 0.5), atol=1e-6)
+    single = open_dataset(dataset).split(cfg.val_fraction, cfg.seed)[0].num_samples
+    assert metrics["train_samples"] == 2 * single
+    assert json.loads((cfg.out / bc.METRICS_FILE).read_text())["config"]["data"] == [
+        str(dataset)] * 2

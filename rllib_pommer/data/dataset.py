@@ -160,14 +160,19 @@ class Dataset:
             yield decode(leftover[0], self.board_size)
 
 
-def open_dataset(data_dir: str | Path) -> Dataset:
-    """The dataset in `data_dir`, every shard's footer checked (ValueError naming the problem)."""
-    data_dir = Path(data_dir)
-    if not data_dir.is_dir():
-        raise ValueError(f"dataset directory {data_dir} does not exist")
-    paths = sorted(data_dir.glob(SHARD_GLOB))
-    if not paths:
-        raise ValueError(f"no shards ({SHARD_GLOB}) in {data_dir}")
+def open_dataset(*data_dirs: str | Path) -> Dataset:
+    """The shards of one or more dataset directories as one dataset (e.g. expert games plus
+    DAgger rounds), every shard's footer checked (ValueError naming the problem)."""
+    if not data_dirs:
+        raise ValueError("no dataset directory given")
+    paths = []
+    for data_dir in map(Path, data_dirs):
+        if not data_dir.is_dir():
+            raise ValueError(f"dataset directory {data_dir} does not exist")
+        found = sorted(data_dir.glob(SHARD_GLOB))
+        if not found:
+            raise ValueError(f"no shards ({SHARD_GLOB}) in {data_dir}")
+        paths += found
     shards, board_sizes = [], set()
     for path in paths:
         shard, meta = read_meta(path)
@@ -176,5 +181,6 @@ def open_dataset(data_dir: str | Path) -> Dataset:
                                          for g in range(metadata.num_row_groups))))
         board_sizes.add(meta.board_size)
     if len(board_sizes) > 1:
-        raise ValueError(f"{data_dir}: shards of different board sizes {sorted(board_sizes)}")
+        raise ValueError(f"{', '.join(map(str, data_dirs))}: shards of different board sizes "
+                         f"{sorted(board_sizes)}")
     return Dataset(shards, board_sizes.pop())
