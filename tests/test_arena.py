@@ -7,7 +7,7 @@ import json
 
 import pytest
 
-from rllib_pommer.arena import MatchSpec, play_match, summarise
+from rllib_pommer.arena import MatchSpec, play_match, summarise, wilson
 from rllib_pommer.evaluate import main
 from rllib_pommer.game.records import read_games
 from rllib_pommer.replay import main as replay_main
@@ -89,3 +89,10 @@ def _exit_code(args) -> int:
 def test_bad_arguments_are_named(args, message, capsys):
     assert _exit_code(args) == 2
     assert message in capsys.readouterr().err
+
+
+def test_wilson_intervals_stay_within_0_and_1():
+    for successes, n in ((0, 1), (0, 25), (25, 25), (1, 1), (0, 1000)):
+        low, high = wilson(successes, n)
+        assert 0.0 <= low <= successes / n <= high <= 1.0
+    assert wilson(0, 25)[0] == 0.0 and wilson(25, 25)[1] == 1.0

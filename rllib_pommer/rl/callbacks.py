@@ -92,7 +92,8 @@ class CurriculumCallback(RLlibCallback):
         index = self.apply_stage(algorithm, episodes)
         before = self.curriculum.stage_at(episodes - int(result[ENV_RUNNER_RESULTS].get(
             NUM_EPISODES, 0)))
-        ended = self.curriculum.stages[before].name if before != index else None
+        finished = episodes >= self.curriculum.total_episodes  # the run stops after this one
+        ended = self.curriculum.stages[before].name if before != index or finished else None
         if ended:
             result[SHOULD_CHECKPOINT] = True  # Tune saves the state at the stage's end
         result["curriculum"] = {

@@ -63,6 +63,7 @@ def test_resume_after_sigkill(tmp_path, pi_weights):
     assert final["curriculum"]["episodes"] >= final["curriculum"]["total_episodes"]
     assert final["curriculum"]["stage_name"] == "static"
     # The warm-up's end was kept apart from the rotating checkpoints, with pi as it started.
+    assert (out / "stages" / "2-static").is_dir()  # the final stage is kept too
     warmup_end = load_checkpoint_net(out / "stages" / "1-warmup").state_dict()
     start = load_policy_net(pi_weights).state_dict()
     assert all(torch.equal(warmup_end[key], start[key]) for key in start)
