@@ -60,6 +60,9 @@ class BCConfig:
     channels_last: bool = True
     bf16: bool = True
     init: Path | None = None  # start from these pi weights (fine-tuning, e.g. after DAgger)
+    # Train on only this many of each sample's counted draws (drawn without replacement, as if
+    # the data had been collected with fewer): measures what more draws buy. None: all of them.
+    max_label_draws: int | None = None
 
     def __post_init__(self):
         if isinstance(self.data, (str, Path)):
@@ -84,6 +87,21 @@ def soft_targets(actions: np.ndarray, counts: np.ndarray) -> np.ndarray:
     targets = counts.astype(np.float32)
     targets[np.arange(len(actions)), actions] += 1.0
     return targets / targets.sum(1, keepdims=True)
+
+
+def fewer_draws(counts: np.ndarray, draws: int, rng: np.random.Generator) -> np.ndarray:
+    """Counts (B, 6) of `draws` of each row's draws taken without replacement (all of a row's
+    draws if it has fewer): the counts a collection with `draws` draws would have recorded."""
+    counts = counts.astype(np.int64)
+    left = counts.sum(1)
+    wanted = np.minimum(left, draws)
+    out = np.zeros_like(counts)
+    for action in range(counts.shape[1] - 1):  # each action's share given the ones before
+        left -= counts[:, action]
+        out[:, action] = rng.hypergeometric(counts[:, action], left, wanted)
+        wanted -= out[:, action]
+    out[:, -1] = wanted
+    return out.astype(np.uint8)
 
 
 def _inputs(obs, cfg: BCConfig) -> torch.Tensor:
@@ -215,6 +233,10 @@ def train(cfg: BCConfig) -> dict:
             if batch < first:
                 continue
             step = epoch * batches_per_epoch + batch
+            if cfg.max_label_draws is not None:
+                rng = np.random.default_rng([cfg.seed, step])
+                samples = samples._replace(action_counts=fewer_draws(
+                    samples.action_counts, cfg.max_label_draws, rng))
             for group in optimizer.param_groups:
                 group["lr"] = learning_rate(cfg, step, cfg.epochs * batches_per_epoch)
             loss, logits = train_step(net, optimizer, samples, cfg)

@@ -131,3 +131,14 @@ def test_init_starts_from_given_weights_and_several_datasets_train_together(data
     assert metrics["train_samples"] == 2 * single
     assert json.loads((cfg.out / bc.METRICS_FILE).read_text())["config"]["data"] == [
         str(dataset)] * 2
+
+
+def test_fewer_draws_subsample_each_rows_draws_without_replacement():
+    rng = np.random.default_rng(0)
+    counts = np.array([[16, 0, 0, 0, 0, 0], [8, 0, 8, 0, 0, 0], [0] * 6, [1, 1, 1, 0, 0, 0]],
+                      np.uint8)
+    picked = np.stack([bc.fewer_draws(counts, 4, rng) for _ in range(2000)])
+    assert (picked.sum(2) == [4, 4, 0, 3]).all()  # a row with fewer draws keeps them all
+    assert (picked <= counts).all() and (picked[:, 0, 0] == 4).all()
+    assert abs(picked[:, 1, 0].mean() - 2.0) < 0.1  # half of 4 from an even split
+    assert np.array_equal(picked[:, 3], np.broadcast_to(counts[3], (2000, 6)))
