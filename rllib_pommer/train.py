@@ -44,12 +44,15 @@ def main(argv: list[str] | None = None) -> int:
     # Imports after parsing, so --help is instant.
     import ray
 
+    from .rl.config import check_pi_weights
     from .rl.curriculum import load_curriculum
-    from .rl.training import init_ray, train
+    from .rl.training import check_run_dir, init_ray, train
 
-    try:
+    try:  # everything that can be checked is checked before Ray starts
         curriculum = load_curriculum(args.curriculum)
         out = args.out or Path("runs") / curriculum.name
+        check_run_dir(out, args.resume)
+        check_pi_weights(Path(args.pi_weights) if args.pi_weights else curriculum.pi_weights)
         init_ray(args.address)
     except ValueError as exc:
         parser.error(str(exc))

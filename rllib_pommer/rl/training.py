@@ -18,7 +18,9 @@ the new machine.
 
 from __future__ import annotations
 
+import json
 import os
+import pickletools
 import re
 import shutil
 import socket
@@ -129,6 +131,50 @@ class StageCheckpoints(FreshOnRestore):
             shutil.copytree(checkpoint.path, run_dir / "stages" / ended, dirs_exist_ok=True)
 
 
+STATE_PATTERNS = ("experiment_state-*.json", "basic-variant-state-*.json")
+
+
+def check_run_dir(out: Path, resume: bool) -> None:
+    """Refuse, before any work, an --out that cannot be used: a new run over an existing one,
+    or a resume without a run or with an unreadable experiment state. (Tune, given an empty state
+    file, logs the error and starts the whole experiment again; a killed run can leave one.)"""
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"--out {out} is a file, not a run directory")
+    exists = tune.Tuner.can_restore(str(out))
+    if not resume:
+        if exists:
+            raise ValueError(f"{out} already holds a run; pass --resume or another --out")
+        return
+    if not exists:
+        raise ValueError(f"--resume: no run to resume in {out}")
+    for pattern in STATE_PATTERNS:
+        newest = max(out.glob(pattern), default=None)
+        problem = newest and _unreadable(newest)
+        if problem:
+            raise ValueError(
+                f"--resume: {newest} is unreadable ({problem}); Tune would start the run over. "
+                f"Put back an intact copy (git checkout, for a run kept in git) or move the file "
+                f"aside to resume from the one before it")
+
+
+def _unreadable(path: Path) -> str | None:
+    """What is wrong with a Tune state file (JSON, or a pickle despite its name), if anything;
+    the pickle is only parsed, never loaded."""
+    try:
+        data = path.read_bytes()
+        if not data:
+            return "empty"
+        if data[:1] in (b"{", b"["):
+            json.loads(data)
+        else:
+            for _ in pickletools.genops(data):
+                pass
+    except (OSError, ValueError) as exc:
+        return str(exc)
+    return None
+
+
 def train(curriculum: Curriculum, out: Path, *, resume: bool = False,
           pi_weights: str | Path | None = None, num_env_runners: int = 0, seed: int = 0):
     """Run (or resume) `curriculum` into the run directory `out`; Ray must be initialised."""
@@ -138,14 +184,11 @@ def train(curriculum: Curriculum, out: Path, *, resume: bool = False,
     os.environ.setdefault("TUNE_GLOBAL_CHECKPOINT_S", "0")
     config = build_config(curriculum, pi_weights=pi_weights, num_env_runners=num_env_runners,
                           seed=seed)
+    check_run_dir(out, resume)
     if resume:
-        if not tune.Tuner.can_restore(str(out)):
-            raise ValueError(f"--resume: no run to resume in {out}")
         tuner = tune.Tuner.restore(str(out), trainable=config.algo_class, param_space=config,
                                    resume_unfinished=True, resume_errored=True)
     else:
-        if tune.Tuner.can_restore(str(out)):
-            raise ValueError(f"{out} already holds a run; pass --resume or another --out")
         tuner = tune.Tuner(
             config.algo_class,
             param_space=config,

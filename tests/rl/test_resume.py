@@ -108,6 +108,14 @@ def test_a_packed_run_resumes_at_another_path(tmp_path, pi_weights):
     assert len(list(trial.glob("checkpoint_*"))) == 1 and (trial / "history.csv").is_file()
     assert not list(trial.glob("events.out.tfevents.*"))
     before = read_rows(trial)
+    (state,) = first.glob("basic-variant-state-*.json")  # pack keeps the newest only
+    intact = state.read_bytes()
+    state.write_bytes(b"")  # as a kill mid-write can leave it: Tune would start over
+    refused = subprocess.run(_train(first, pi_weights, "--curriculum", str(curriculum),
+                                    "--resume"), cwd=REPO, capture_output=True, text=True,
+                             timeout=120)
+    assert refused.returncode == 2 and f"{state.name} is unreadable" in refused.stderr
+    state.write_bytes(intact)
     moved = tmp_path / "clone" / "campaign" / "run"
     shutil.copytree(first, moved)
     shutil.rmtree(tmp_path / "first")  # nothing may point back to the old place
