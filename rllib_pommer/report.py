@@ -32,7 +32,7 @@ from .viz.figures import (
 )
 from .viz.frames import load_game
 from .viz.matches import ROW_KEYS, load_outcomes, rates_by_opponent
-from .viz.paper import PAPER_TABLES
+from .viz.paper import paper_table
 from .viz.render import render_game
 from .viz.tables import results_table, training_table
 from .viz.training import (
@@ -83,7 +83,7 @@ def _tables_and_fig4(records: list[Path], out: Path) -> Iterator[str]:
         ours = rates_by_opponent(outcomes, team)
         if comparable_opponents(ours):
             name = f"fig4_filters_{team}.png"
-            paper = PAPER_TABLES.get(team, ("", {}))[1]
+            paper = (paper_table(team) or ("", {}))[1]
             plot_filter_effects(ours, paper, f"Fig. 4: effect of the filters on {team}", out / name)
             yield f"![Fig. 4 for {team}]({name})"
 

@@ -1,4 +1,4 @@
-"""The paper's Tables 2 and 3 (Meisheri et al. 2019), from ../shared/docs/paper-meisheri-2019.tex.
+"""The paper's Tables 2 and 3 (Meisheri et al. 2019), from its LaTeX tables (tests/reference/).
 
 Each cell is (win, loss, tie) of the row's team in 1000 games, by opponent and by variant; None
 where the paper has "-". One typo is corrected: Table 3, SimpleAgent_NoBomb_action, PPO_action
@@ -6,6 +6,8 @@ reads "016" for the loss rate; 0.16 makes the row sum to 1.
 """
 
 from __future__ import annotations
+
+import re
 
 from .matches import VARIANTS
 
@@ -62,3 +64,12 @@ PAPER_TABLES: dict[str, tuple[str, dict[str, dict[str, Cell]]]] = {
         "skynet": _row(None, None, None, (0.451, 0.126, 0.423)),
     }),
 }
+
+
+def paper_table(team: str) -> tuple[str, dict[str, dict[str, Cell]]] | None:
+    """The paper's table our team `team` is measured against: by name, a versioned policy
+    (`imitation_v1`) by the name without its version."""
+    for name in (team, re.sub(r"_v\d+$", "", team)):
+        if name in PAPER_TABLES:
+            return PAPER_TABLES[name]
+    return None

@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 
 from .matches import VARIANTS, Match, Outcomes
-from .paper import PAPER_OPPONENTS, PAPER_TABLES
+from .paper import PAPER_OPPONENTS, paper_table
 from .training import StageFigures
 
 
@@ -18,7 +18,7 @@ def _rates(cell) -> str:
 def results_table(team: str, results: dict[Match, Outcomes]) -> str:
     """The Markdown table of `team` (policy name without filters), beside the paper's if any."""
     ours = {(m.vs, m.variant): o for m, o in results.items() if m.team == team}
-    title, paper_rows = PAPER_TABLES.get(team, (None, {}))
+    title, paper_rows = paper_table(team) or (None, {})
     opponents = list(paper_rows) + sorted({vs for vs, _ in ours} - set(paper_rows))
     heading = f"{title} — ours: `{team}`" if title else f"Team `{team}` (not in the paper)"
     lines = [f"### {heading}", "",

@@ -10,7 +10,7 @@ import pytest
 
 from rllib_pommer.viz.behaviour import heatmaps_by_opponent, to_top_left
 from rllib_pommer.viz.matches import Match, load_outcomes, match_of
-from rllib_pommer.viz.paper import PAPER_OPPONENTS, PAPER_TABLES
+from rllib_pommer.viz.paper import PAPER_OPPONENTS, PAPER_TABLES, paper_table
 from rllib_pommer.viz.tables import training_table
 from rllib_pommer.viz.training import rolling_mean, stage_figures, training_curve, write_summary
 
@@ -201,3 +201,9 @@ def test_stage_figures_add_up_each_phase_and_weight_rates_by_episodes(tmp_path):
     table = training_table([warmup, static])
     assert "| tmp_path | warmup | 2 | 40 | 2,000 | 0.03 | 17 | 0.750 / 0.250 / 0.000 | — |" \
         .replace("tmp_path", tmp_path.name) in table
+
+
+def test_versions_of_our_teams_meet_the_paper_table_of_their_family():
+    assert paper_table("imitation_v1") is paper_table("imitation") is PAPER_TABLES["imitation"]
+    assert paper_table("ppo_v2") is PAPER_TABLES["ppo"]
+    assert paper_table("ppo_cautious") is None and paper_table("simple") is None
