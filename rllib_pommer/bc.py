@@ -39,6 +39,8 @@ METRICS_FILE = "metrics.json"
 
 @dataclass
 class BCConfig:
+    """Every setting of a behaviour-cloning run; `python -m rllib_pommer.imitate` makes one
+    option of each field."""
     data: list[Path]  # one or more dataset folders (expert games, DAgger rounds)
     out: Path
     epochs: int = 1

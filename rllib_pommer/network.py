@@ -24,6 +24,7 @@ NUM_ACTIONS = 6
 
 
 class PommerNet(nn.Module):
+    """The paper's CNN (module docstring): 19 planes in, `num_outputs` logits or one value out."""
     def __init__(self, num_outputs: int = NUM_ACTIONS, dropout: float = 0.0):
         super().__init__()
         layers: list[nn.Module] = []

@@ -27,6 +27,7 @@ ALL_AGREED = 8
 
 
 class AgreementResult(NamedTuple):
+    """What `measure_agreement` found: the line `replay agree` prints, and the reference's own."""
     agreement: float  # A: fraction of all decisions equal to the recorded action
     decisions: int  # N
     stable_agreement: float  # S: the same fraction over decisions where all 8 references agreed

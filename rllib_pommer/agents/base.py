@@ -16,6 +16,7 @@ from ..game.observation import Observation
 
 @runtime_checkable
 class Agent(Protocol):
+    """Anything that can take a seat: reset per game, then one action per observation."""
     def reset(self, agent_id: int, game_type: int, rng: np.random.Generator) -> None:
         """Forget the last game; remember the seat and draw any seeds from `rng`."""
 

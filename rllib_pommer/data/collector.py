@@ -32,6 +32,7 @@ TEMP_GLOB = ".shard-*.tmp"
 
 @dataclass(frozen=True)
 class ShardResult:
+    """What writing one shard produced."""
     games: int
     samples: int
     bytes: int

@@ -58,6 +58,8 @@ def _learner_outcome(chunks) -> tuple[str, float] | None:
 
 
 class CurriculumCallback(RLlibCallback):
+    """Keeps the stage of `curriculum` that the lifetime episode count says is in force, on
+    every env runner, env and learner, and logs the learner's true outcomes (module docstring)."""
     def __init__(self, curriculum: Curriculum):
         super().__init__()
         self.curriculum = curriculum

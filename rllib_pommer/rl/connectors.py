@@ -73,6 +73,8 @@ def _log_softmax(logits: np.ndarray) -> np.ndarray:
 
 
 class LearnerFilters(ConnectorV2):
+    """Module-to-env piece: the learner's action through its episode's jitter correction and
+    action filter (when on), with ACTION_LOGP recomputed for the executed action."""
     def __call__(self, *, rl_module, batch, episodes, explore=None, shared_data=None,
                  metrics=None, **kwargs):
         by_id = {episode.id_: episode for episode in episodes}

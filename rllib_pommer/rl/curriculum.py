@@ -55,6 +55,8 @@ TOP_KEYS = ("name", "description", "pi_weights", "max_steps", "ppo", "defaults",
 
 @dataclass(frozen=True)
 class Stage:
+    """One phase of a curriculum: who plays, for how many episodes, with which reward and
+    filters, and whether pi is frozen."""
     name: str
     opponent: str
     episodes: int
@@ -70,6 +72,7 @@ STAGE_KEYS = tuple(f.name for f in fields(Stage))
 
 @dataclass(frozen=True)
 class Curriculum:
+    """A training schedule as loaded and checked from its TOML file."""
     name: str
     path: Path
     stages: tuple[Stage, ...]

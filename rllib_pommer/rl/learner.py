@@ -12,6 +12,7 @@ from ray.rllib.algorithms.ppo.torch.ppo_torch_learner import PPOTorchLearner
 
 
 class PommerPPOLearner(PPOTorchLearner):
+    """RLlib's PPO torch learner with a fused Adam per module."""
     def configure_optimizers_for_module(self, module_id, config=None) -> None:
         params = self.get_parameters(self._module[module_id])
         self.register_optimizer(module_id=module_id,

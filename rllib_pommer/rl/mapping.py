@@ -18,6 +18,7 @@ _REMEMBERED_EPISODES = 256  # plenty for the episodes a runner's vector env has 
 
 
 class SeatMapping:
+    """The policy mapping of one stage: module id for (agent id, episode), see above."""
     def __init__(self, stage: int, teammate: str, opponent: str):
         self.stage, self.teammate, self.opponent = stage, teammate, opponent
         self._seats: dict[str, int] = {}

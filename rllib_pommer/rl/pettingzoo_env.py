@@ -19,6 +19,7 @@ def _name(agent: int) -> str:
 
 
 class PommeParallelEnv(ParallelEnv):
+    """The four-agent Team game as a PettingZoo `ParallelEnv` (agents "agent_0".."agent_3")."""
     metadata = {"name": "pommerman_team_v0", "render_modes": []}
 
     def __init__(self, config: dict | None = None):

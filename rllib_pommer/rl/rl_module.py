@@ -32,6 +32,8 @@ LEARNER = "learner"
 
 
 class PommerPPOModule(TorchRLModule, ValueFunctionAPI):
+    """The PPO learner module: pi (the paper's CNN, from the imitation weights) and a separate
+    value CNN, both channels-last under bfloat16 autocast (module docstring)."""
     def setup(self):
         self.pi = PommerNet(6, dropout=0.0).to(memory_format=torch.channels_last)
         self.vf = PommerNet(1).to(memory_format=torch.channels_last)

@@ -19,11 +19,13 @@ from .protocol import BadRequest
 
 
 class Seat(NamedTuple):
+    """The seat a server plays in the current game."""
     agent_id: int
     game_type: int
 
 
 class PolicyHost:
+    """One agent of a named policy, playing the seat the last `/init_agent` gave it."""
     def __init__(self, policy: str, filters: Iterable[str] = (), seed: int = 0):
         self.agent = make_agent(policy, filters)
         self.seed = seed

@@ -27,6 +27,7 @@ class BadRequest(ValueError):
 
 
 class InitAgent(NamedTuple):
+    """A decoded `/init_agent` body."""
     agent_id: int
     game_type: int
     seed: np.random.Generator | None  # None: the caller sent no seed (the protocol has none)

@@ -29,6 +29,7 @@ ROW_KEYS = frozenset({"game", "seats_a", "result"})
 
 @dataclass(frozen=True)
 class Match:
+    """Which match a record file holds: our team, its filter variant and the opponent."""
     team: str  # policy name without filters
     variant: str  # one of VARIANTS
     vs: str
