@@ -18,6 +18,7 @@ from __future__ import annotations
 import argparse
 import csv
 import json
+import os
 import sys
 import time
 from pathlib import Path
@@ -74,6 +75,19 @@ def format_summary(spec: MatchSpec, summary: dict) -> str:
     ])
 
 
+def check_output(path: Path | None, flag: str) -> None:
+    """Refuse, before any game is played, an output file that could not be written."""
+    if path is None:
+        return
+    if path.is_dir():
+        raise ValueError(f"{flag} {path} is a directory, not a file")
+    folder = path.parent if str(path.parent) else Path(".")
+    if not folder.is_dir():
+        raise ValueError(f"{flag} {path}: folder {folder} does not exist")
+    if not os.access(folder, os.W_OK) or (path.exists() and not os.access(path, os.W_OK)):
+        raise ValueError(f"{flag} {path}: not writable")
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m rllib_pommer.evaluate", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -94,6 +108,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--json", action="store_true", help="print a final JSON summary")
     args = parser.parse_args(argv)
     try:
+        check_output(args.records, "--records")
+        check_output(args.replays if args.record > 0 else None, "--replays")
         spec = MatchSpec(args.team, args.vs, args.games, args.seed, args.filters, args.fixed_seats)
         start = time.perf_counter()
         with tqdm(total=spec.games, unit="game", file=sys.stderr, mininterval=1) as bar:
@@ -104,17 +120,24 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     summary = summarise(records)
     summary["seconds"] = elapsed
-    if args.records:
-        write_records(args.records, records)
-    if args.record > 0:
-        count = write_games(args.replays, record_games(spec, args.record, args.with_observations))
-        print(f"  wrote {count} replays to {args.replays}")
-    print(format_summary(spec, summary))
+    print(format_summary(spec, summary))  # first: the match's result survives a failed write
     print(f"  {len(records) / elapsed:.1f} games/s")
+    failed = 0
+    try:
+        if args.records:
+            write_records(args.records, records)
+        if args.record > 0:
+            count = write_games(args.replays,
+                                record_games(spec, args.record, args.with_observations))
+            print(f"  wrote {count} replays to {args.replays}")
+    except OSError as exc:
+        print(f"error: the match was played, but writing its output failed: {exc}",
+              file=sys.stderr)
+        failed = 2
     if args.json:
         print(json.dumps({"team": spec.team, "vs": spec.vs, "filters": list(spec.filters),
                           "seed": spec.seed, **summary}))
-    return 0
+    return failed
 
 
 if __name__ == "__main__":

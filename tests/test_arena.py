@@ -85,6 +85,11 @@ def _exit_code(args) -> int:
     (["--team", "nosuch", "--vs", "simple"], "unknown policy 'nosuch'; valid: "),
     (["--team", "simple", "--vs", "simple", "--filters", "jitter,magic"], "unknown filter 'magic'"),
     (["--team", "simple", "--vs", "simple", "--games", "0"], "must be a positive number"),
+    (["--team", "simple", "--vs", "static", "--records", "/nodir/x.jsonl"],
+     "--records /nodir/x.jsonl: folder /nodir does not exist"),
+    (["--team", "simple", "--vs", "static", "--records", "/tmp"], "is a directory"),
+    (["--team", "simple", "--vs", "static", "--record", "1", "--replays", "/nodir/r.jsonl.gz"],
+     "--replays /nodir/r.jsonl.gz: folder /nodir does not exist"),
 ])
 def test_bad_arguments_are_named(args, message, capsys):
     assert _exit_code(args) == 2
@@ -96,3 +101,15 @@ def test_wilson_intervals_stay_within_0_and_1():
         low, high = wilson(successes, n)
         assert 0.0 <= low <= successes / n <= high <= 1.0
     assert wilson(0, 25)[0] == 0.0 and wilson(25, 25)[1] == 1.0
+
+
+def test_a_failed_write_after_the_match_still_prints_the_summary(tmp_path, capsys, monkeypatch):
+    def disk_full(path, records):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr("rllib_pommer.evaluate.write_records", disk_full)
+    code = _exit_code(["--team", "simple", "--vs", "static", "--games", "2", "--workers", "1",
+                       "--records", str(tmp_path / "r.jsonl")])
+    captured = capsys.readouterr()
+    assert code == 2 and "writing its output failed" in captured.err
+    assert "simple vs static: 2 games" in captured.out and "win " in captured.out
