@@ -21,6 +21,9 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from pathlib import Path
 
+import pyarrow as pa
+import pyarrow.parquet as pq
+
 from ..game.constants import TEAM
 from .dagger import OPPONENTS, play_dagger_games
 from .expert import play_games
@@ -111,12 +114,30 @@ def write_shard(out_dir: Path, index: int, meta: ShardMeta) -> ShardResult:
     return ShardResult(meta.stop_game - meta.first_game, table.num_rows, final.stat().st_size)
 
 
+def _intact(path: Path) -> tuple[pq.ParquetFile, ShardMeta] | None:
+    """The shard and what it covers if every page of it reads back (the page checksums the
+    collector writes catch damage inside a page), else None."""
+    try:
+        shard, meta = read_meta(path)
+        shard.read()
+    except (ValueError, OSError, pa.ArrowException):
+        return None
+    return shard, meta
+
+
 def finished_shards(out_dir: Path, plan: list[ShardMeta]) -> dict[int, ShardResult]:
-    """The planned shards already in `out_dir`; ValueError if a shard there belongs elsewhere."""
+    """The planned shards already in `out_dir`; ValueError if a shard there belongs elsewhere.
+    A damaged shard (cut short, or a page that fails its checksum) is deleted, to be played
+    again."""
     index_of = {shard_name(i): i for i in range(len(plan))}
     done = {}
     for path in sorted(out_dir.glob(SHARD_GLOB)):
-        shard, meta = read_meta(path)
+        intact = _intact(path)
+        if intact is None:
+            print(f"{path}: damaged, deleted; it will be played again", file=sys.stderr)
+            path.unlink()
+            continue
+        shard, meta = intact
         index = index_of.get(path.name)
         if index is None or meta != plan[index]:
             expected = plan[index] if index is not None else "no such shard"

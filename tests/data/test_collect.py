@@ -173,3 +173,22 @@ def test_cli_summary_and_bad_arguments(tmp_path, capsys):
     assert "2 shards, 2 games" in out and "bytes/sample" in out and "games/s" in out
     with pytest.raises(SystemExit):
         main(["--games", "0", "--out", str(tmp_path / "zero")])
+
+
+def test_damaged_shards_are_played_again_on_resume(tiny_dataset, tmp_path, capsys):
+    """A shard cut short and one with a corrupted data page (its footer intact) are found by the
+    resume check, deleted and played again: the dataset comes back whole."""
+    out = tmp_path / "damaged"
+    shutil.copytree(tiny_dataset, out)
+    cut, flipped = out / "shard-000000.parquet", out / "shard-000001.parquet"
+    cut.write_bytes(cut.read_bytes()[: cut.stat().st_size // 2])
+    maps = read_meta(flipped)[0].metadata.row_group(0).column(5)
+    data = bytearray(flipped.read_bytes())
+    middle = maps.data_page_offset + maps.total_compressed_size // 2
+    data[middle:middle + 8] = bytes(b ^ 0xFF for b in data[middle:middle + 8])
+    flipped.write_bytes(bytes(data))
+    collection = _tiny(out, TINY_GAMES, TINY_SEED)
+    assert collection.missing == [0, 1]
+    assert "shard-000000.parquet: damaged" in capsys.readouterr().err
+    collection.run(workers=1)
+    assert read_all(out).equals(read_all(tiny_dataset))
