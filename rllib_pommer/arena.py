@@ -13,8 +13,8 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass
+from functools import partial
 
 import numpy as np
 import torch
@@ -40,6 +40,7 @@ from .game.state import (
     M_BOMBS,
 )
 from .learned import LearnedAgent
+from .parallel import map_unordered
 
 SEATS_A = ((0, 2), (1, 3))
 
@@ -234,22 +235,14 @@ def play_match(spec: MatchSpec, workers: int | None = None,
     remote = _plays_remote_agents(spec)  # also fails fast on bad names, before any process starts
     chunk_games = 1 if remote else CHUNK_GAMES
     workers = 1 if remote else (workers or os.cpu_count() or 1)
-    chunks = [range(i, min(i + chunk_games, spec.games))
-              for i in range(0, spec.games, chunk_games)]
+    chunks = (range(i, min(i + chunk_games, spec.games))
+              for i in range(0, spec.games, chunk_games))
+    workers = min(workers, -(-spec.games // chunk_games))
     records: list[GameRecord] = []
-    if workers == 1 or len(chunks) == 1:
-        for games in chunks:
-            records += _play_chunk(spec, games)[0]
-            if progress:
-                progress(len(games))
-    else:
-        with ProcessPoolExecutor(min(workers, len(chunks))) as pool:
-            futures = [pool.submit(_play_chunk, spec, games) for games in chunks]
-            for future in as_completed(futures):
-                done = future.result()[0]
-                records += done
-                if progress:
-                    progress(len(done))
+    for _, (done, _) in map_unordered(partial(_play_chunk, spec), chunks, workers):
+        records += done
+        if progress:
+            progress(len(done))
     return sorted(records, key=lambda r: r.game)
 
 

@@ -16,18 +16,27 @@ import hashlib
 import os
 import signal
 import sys
-from collections.abc import Callable, Iterator
-from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import dataclass
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import pyarrow as pa
 import pyarrow.parquet as pq
 
 from ..game.constants import TEAM
+from ..parallel import map_unordered
 from .dagger import OPPONENTS, play_dagger_games
 from .expert import play_games
-from .schema import SHARD_GLOB, Samples, ShardMeta, encode, read_meta, shard_name, write_table
+from .schema import (
+    SHARD_GLOB,
+    Samples,
+    ShardMeta,
+    encode,
+    read_meta,
+    shard_index,
+    shard_name,
+    write_table,
+)
 
 SHARD_GAMES = 128  # ~110,000 samples: a worker peaks ~300 MB above its base; ~1.7 MB on disk
 TEMP_GLOB = ".shard-*.tmp"
@@ -72,9 +81,26 @@ def plan_shards(games: int, seed: int, shard_games: int, label_draws: int = 0,
         _, weights = greedy_actor(dagger.policy)
         players = {"agents": "dagger", "policy": dagger.policy,
                    "policy_sha256": _sha256(weights), "opponents": ",".join(dagger.opponents)}
-    return [ShardMeta(seed, first, min(first + shard_games, games), shard_games, TEAM.board_size,
-                      label_draws=label_draws, **players)
-            for first in range(0, games, shard_games)]
+    return ShardPlan(games, ShardMeta(seed, 0, 0, shard_games, TEAM.board_size,
+                                      label_draws=label_draws, **players))
+
+
+class ShardPlan(Sequence):
+    """The shards of a dataset of `games` games, each made when asked for, so planning a huge
+    dataset costs nothing: shard k covers games [k * shard_games, (k + 1) * shard_games)."""
+
+    def __init__(self, games: int, template: ShardMeta):
+        self.games, self.template = games, template
+
+    def __len__(self) -> int:
+        return -(-self.games // self.template.shard_games)
+
+    def __getitem__(self, index: int) -> ShardMeta:
+        if not 0 <= index < len(self):
+            raise IndexError(index)
+        first = index * self.template.shard_games
+        return replace(self.template, first_game=first,
+                       stop_game=min(first + self.template.shard_games, self.games))
 
 
 def _play(meta: ShardMeta) -> Samples:
@@ -129,7 +155,6 @@ def finished_shards(out_dir: Path, plan: list[ShardMeta]) -> dict[int, ShardResu
     """The planned shards already in `out_dir`; ValueError if a shard there belongs elsewhere.
     A damaged shard (cut short, or a page that fails its checksum) is deleted, to be played
     again."""
-    index_of = {shard_name(i): i for i in range(len(plan))}
     done = {}
     for path in sorted(out_dir.glob(SHARD_GLOB)):
         intact = _intact(path)
@@ -138,7 +163,8 @@ def finished_shards(out_dir: Path, plan: list[ShardMeta]) -> dict[int, ShardResu
             path.unlink()
             continue
         shard, meta = intact
-        index = index_of.get(path.name)
+        index = shard_index(path.name)
+        index = index if index is not None and index < len(plan) else None
         if index is None or meta != plan[index]:
             expected = plan[index] if index is not None else "no such shard"
             raise ValueError(f"{path} holds {meta}; this run expects {expected}: "
@@ -177,22 +203,15 @@ class Collection:
         process), calling `progress` as each completes; return every shard's result."""
         for stale in self.out_dir.glob(TEMP_GLOB):
             stale.unlink()
-        missing = self.missing
-        workers = min(workers or os.cpu_count() or 1, max(1, len(missing)))
-        if workers == 1:
-            self._gather(((i, write_shard(self.out_dir, i, self.plan[i])) for i in missing),
-                         progress)
-        else:
-            with ProcessPoolExecutor(workers, initializer=_die_with_parent) as pool:
-                futures = {pool.submit(write_shard, self.out_dir, i, self.plan[i]): i
-                           for i in missing}
-                self._gather(((futures[f], f.result()) for f in as_completed(futures)),
-                             progress)
-        return self.results
-
-    def _gather(self, completed: Iterator[tuple[int, ShardResult]],
-                progress: Callable[[ShardResult], None] | None) -> None:
-        for index, result in completed:
+        workers = min(workers or os.cpu_count() or 1, max(1, len(self.plan) - len(self.results)))
+        missing = (i for i in range(len(self.plan)) if i not in self.results)
+        jobs = ((self.out_dir, i, self.plan[i]) for i in missing)
+        for (_, index, _), result in map_unordered(_write, jobs, workers, _die_with_parent):
             self.results[index] = result
             if progress:
                 progress(result)
+        return self.results
+
+
+def _write(job: tuple[Path, int, ShardMeta]) -> ShardResult:
+    return write_shard(*job)

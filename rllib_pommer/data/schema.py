@@ -18,6 +18,7 @@ schema 1 (no `action_counts`) still read, with zero counts.
 from __future__ import annotations
 
 import json
+import re
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -107,6 +108,12 @@ class ShardMeta:
 
 def shard_name(index: int) -> str:
     return f"shard-{index:06d}.parquet"
+
+
+def shard_index(name: str) -> int | None:
+    """The index `shard_name` made `name` from, or None."""
+    match = re.fullmatch(r"shard-(\d{6,})\.parquet", name)
+    return int(match.group(1)) if match else None
 
 
 def _narrow(values: np.ndarray, dtype, name: str) -> np.ndarray:
