@@ -87,6 +87,35 @@ PLUGIN_KINDS = {
 }
 
 
+# The keys each kind's policy files may hold beyond kind and description, with their types
+# (required ones marked True). Kind "http" checks its own keys (http_agent.py).
+KIND_KEYS: dict[str, dict[str, tuple[type, bool]]] = {
+    **{kind: {} for kind in ("static", "random", "simple", "simple_nobomb", "smart_random",
+                             "suicide")},
+    "learned": {"weights": (str, True), "greedy": (bool, False)},
+    "rllib_checkpoint": {"checkpoint": (str, True), "greedy": (bool, False)},
+}
+
+
+def _check_params(path: Path, kind: str, params: Mapping[str, Any]) -> None:
+    """Unknown keys and values of the wrong type are errors, never ignored or coerced (a
+    `greedy = "false"` would otherwise be true)."""
+    if kind not in KIND_KEYS:
+        return
+    valid = KIND_KEYS[kind]
+    for key, value in params.items():
+        if key not in valid:
+            raise ValueError(f"policy file {path}: unknown key {key!r} for kind {kind!r}; "
+                             f"valid: {sorted(valid) or 'none'}")
+        wanted = valid[key][0]
+        if type(value) is not wanted:
+            raise ValueError(f"policy file {path}: {key} must be a {wanted.__name__}, got "
+                             f"{value!r}")
+    missing = [key for key, (_, required) in valid.items() if required and key not in params]
+    if missing:
+        raise ValueError(f"policy file {path}: kind {kind!r} needs key {missing[0]!r}")
+
+
 def _ensure_kind(kind: str) -> None:
     if isinstance(kind, str) and kind in PLUGIN_KINDS and kind not in KINDS:
         importlib.import_module(PLUGIN_KINDS[kind])
@@ -122,6 +151,7 @@ def _load_spec(path: Path, filters: tuple[str, ...]) -> PolicySpec:
     description = data.pop("description", "")
     if not isinstance(description, str):
         raise ValueError(f"policy file {path}: description must be a string")
+    _check_params(path, kind, data)
     return PolicySpec(path.stem, kind, description, path, data, filters)
 
 

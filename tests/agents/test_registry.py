@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import pytest
 
 from rllib_pommer.agents import registry
@@ -125,11 +127,27 @@ def test_new_kinds_can_be_registered_with_parameters(tmp_path, monkeypatch):
         seen.update(spec.params)
         return SuicideTeammate() if spec.params["brave"] else SmartRandom()
 
-    monkeypatch.setitem(registry.KINDS, "learned", build)
+    monkeypatch.setitem(registry.KINDS, "custom", build)
     path = tmp_path / "ppo.toml"
-    path.write_text('kind = "learned"\ndescription = "weights"\nbrave = true\nsteps = 3\n')
+    path.write_text('kind = "custom"\ndescription = "weights"\nbrave = true\nsteps = 3\n')
     assert isinstance(make_agent(path), SuicideTeammate)
     assert seen == {"brave": True, "steps": 3}
-    monkeypatch.delitem(registry.KINDS, "learned")
-    registry.register_kind("learned", build)
-    assert registry.KINDS["learned"] is build
+    monkeypatch.delitem(registry.KINDS, "custom")
+    registry.register_kind("custom", build)
+    assert registry.KINDS["custom"] is build
+    monkeypatch.delitem(registry.KINDS, "custom")
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    ('kind = "learned"\nweights = "w.pt"\ngreedy = "no"\n', "greedy must be a bool, got 'no'"),
+    ('kind = "learned"\nweights = 5\n', "weights must be a str, got 5"),
+    ('kind = "learned"\ngreedy = true\n', "kind 'learned' needs key 'weights'"),
+    ('kind = "learned"\nweights = "w.pt"\ngredy = true\n', "unknown key 'gredy'"),
+    ('kind = "static"\nspeed = 3\n', "unknown key 'speed' for kind 'static'; valid: none"),
+])
+def test_policy_file_keys_are_checked_strictly(tmp_path, text, message):
+    path = tmp_path / "p.toml"
+    path.write_text(text)
+    with pytest.raises(ValueError, match=re.escape(message)) as info:
+        resolve_policy(path)
+    assert str(path) in str(info.value)
