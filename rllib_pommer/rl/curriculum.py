@@ -125,6 +125,31 @@ def _check_keys(where: str, table: dict, valid) -> None:
             raise ValueError(f"{where}: unknown key {key!r}; valid keys: {sorted(valid)}")
 
 
+def _check_type(where: str, key: str, value: Any, kind: type, positive: bool = False) -> None:
+    """Strict TOML types: a bool is not a number, a string is not a bool; a float may be
+    written as an integer."""
+    fits = (type(value) is kind or (kind is float and type(value) is int))
+    if not fits or (positive and not value > 0):
+        noun = {bool: "true or false", int: "integer", float: "number", str: "string"}[kind]
+        wanted = f"a positive {noun}" if positive else noun if kind is bool else f"a {noun}"
+        wanted = "an integer" if wanted == "a integer" else wanted
+        raise ValueError(f"{where}: {key} must be {wanted}, got {value!r}")
+
+
+# Each PPO option's type (from its default) and range.
+PPO_RANGES = {"lr": (0, None), "gamma": (0, 1), "lambda": (0, 1), "vf_loss_coeff": (0, None)}
+
+
+def _check_ppo(where: str, ppo: dict) -> None:
+    for key, value in ppo.items():
+        kind = type(PPO_OPTIONS[key])
+        _check_type(where, key, value, kind, positive=kind is int)
+        low, high = PPO_RANGES.get(key, (None, None))
+        if (low is not None and not value > low) or (high is not None and not value <= high):
+            raise ValueError(f"{where}: {key} must be in ({low}, {high or 'inf'}], "
+                             f"got {value!r}")
+
+
 def _check_policy(where: str, name: Any) -> None:
     try:
         spec = resolve_policy(name)
@@ -141,9 +166,12 @@ def _stage(where: str, table: dict) -> Stage:
     for key in ("name", "opponent", "episodes"):
         if key not in table:
             raise ValueError(f"{where}: missing key {key!r}")
+    for field in fields(Stage):
+        if field.name in table:
+            kind = {"str": str, "int": int, "float": float, "bool": bool}[str(field.type)]
+            _check_type(where, field.name, table[field.name], kind,
+                        positive=field.name == "episodes")
     stage = Stage(**table)
-    if not isinstance(stage.episodes, int) or stage.episodes <= 0:
-        raise ValueError(f"{where}: episodes must be a positive integer, got {stage.episodes!r}")
     if stage.reward not in REWARD_MODES:
         raise ValueError(f"{where}: reward {stage.reward!r} is not one of {list(REWARD_MODES)}")
     for key in ("action_filter", "jitter"):
@@ -165,8 +193,14 @@ def load_curriculum(name_or_path: str | Path) -> Curriculum:
         raise ValueError(f"curriculum file {path}: invalid TOML ({exc})") from None
     where = f"curriculum file {path}"
     _check_keys(where, data, TOP_KEYS)
+    for key, kind in (("name", str), ("description", str), ("pi_weights", str)):
+        if key in data:
+            _check_type(where, key, data[key], kind)
+    if "max_steps" in data:
+        _check_type(where, "max_steps", data["max_steps"], int, positive=True)
     ppo = data.get("ppo", {})
     _check_keys(f"{where} [ppo]", ppo, PPO_OPTIONS)
+    _check_ppo(f"{where} [ppo]", ppo)
     defaults = data.get("defaults", {})
     _check_keys(f"{where} [defaults]", defaults, set(STAGE_KEYS) - {"name", "episodes"})
     tables = data.get("stage", [])
@@ -180,6 +214,6 @@ def load_curriculum(name_or_path: str | Path) -> Curriculum:
         stages=stages,
         pi_weights=(path.parent / data["pi_weights"] if "pi_weights" in data
                     else policies_dir() / "imitation" / "pi.pt").resolve(),
-        max_steps=int(data.get("max_steps", 800)),
+        max_steps=data.get("max_steps", 800),
         ppo={**PPO_OPTIONS, **ppo},
     )

@@ -31,6 +31,15 @@ def _write(tmp_path, text):
     (STAGE + 'reward = "dense"\n', ["reward", "shaped", "raw"]),
     ("[ppo]\nlearning_rate = 1\n" + STAGE, ["[ppo]", "learning_rate", "lr"]),
     (STAGE.replace('"static"', '"simple_action"'), ["simple_action", "filter"]),
+    (STAGE + "freeze_pi = \"no\"\n", ["freeze_pi must be true or false, got 'no'"]),
+    (STAGE.replace('"static"', "5"), ["opponent must be a string, got 5"]),
+    ("[ppo]\ntrain_batch_size = \"big\"\n" + STAGE,
+     ["train_batch_size must be a positive integer, got 'big'"]),
+    ("[ppo]\ngamma = 1.5\n" + STAGE, ["gamma must be in (0, 1]"]),
+    ("max_steps = -10\n" + STAGE, ["max_steps must be a positive integer, got -10"]),
+    ('max_steps = "abc"\n' + STAGE, ["max_steps must be a positive integer, got 'abc'"]),
+    (STAGE.replace("episodes = 5", "episodes = 2.5"), ["episodes must be a positive integer"]),
+    (STAGE + "action_filter = true\n", ["action_filter must be a number, got True"]),
 ])
 def test_curriculum_errors_name_file_key_and_choices(tmp_path, text, words):
     path = _write(tmp_path, text)
