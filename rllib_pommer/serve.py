@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import sys
+import time
 
 import torch
 
@@ -35,11 +36,17 @@ def main(argv: list[str] | None = None) -> int:
     # other busy processes they spin against them (an untrained PommerNet's act took 136 ms with
     # two threads and 0.4 ms with one on the loaded 2-core dev box).
     torch.set_num_threads(1)
+    if not 0 <= args.port < 65536:
+        print(f"error: --port must be in 0..65535, got {args.port}", file=sys.stderr)
+        return 2
     try:
         host = PolicyHost(args.policy, [f for f in args.filters.split(",") if f], args.seed)
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    started = time.perf_counter()
+    host.warm_up()  # before /ping answers: a pinging runner may start the game at once
+    print(f"{args.policy} warmed up in {time.perf_counter() - started:.1f} s", file=sys.stderr)
 
     def announce(port: int) -> None:
         print(f"serving {args.policy} on http://{args.host}:{port}", flush=True)

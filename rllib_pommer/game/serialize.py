@@ -233,15 +233,18 @@ def load_observation(d: Mapping, agent_id: int) -> Observation:
     return Observation(
         **maps,
         position=np.array(_cell(_field(d, "position", where), f"{where}.position", size), np.int32),
-        ammo=np.int32(_int(_field(d, "ammo", where), f"{where}.ammo", 0)),
+        # bounded to what the arrays hold (uint8 maps and features, int32 counters)
+        ammo=np.int32(_int(_field(d, "ammo", where), f"{where}.ammo", 0, 255)),
         blast_strength=np.int32(
-            _int(_field(d, "blast_strength", where), f"{where}.blast_strength")
+            _int(_field(d, "blast_strength", where), f"{where}.blast_strength", 0, 255)
         ),
         can_kick=np.bool_(_bool(_field(d, "can_kick", where), f"{where}.can_kick")),
         alive=alive,
         agent_id=np.int32(agent_id),
         game_type=np.int32(_int(_field(d, "game_type", where), f"{where}.game_type", 1, 2)),
-        step_count=np.int32(_int(_field(d, "step_count", where), f"{where}.step_count", 0)),
+        step_count=np.int32(
+            _int(_field(d, "step_count", where), f"{where}.step_count", 0, 2**31 - 1)
+        ),
     )
 
 

@@ -14,6 +14,8 @@ import numpy as np
 
 from .. import learned  # noqa: F401  (registers the "learned" policy kind)
 from ..agents.registry import make_agent
+from ..game.constants import NUM_AGENTS, TEAM
+from ..game.engine import Game
 from ..game.observation import Observation
 from .protocol import BadRequest
 
@@ -31,6 +33,23 @@ class PolicyHost:
         self.seed = seed
         self.games_started = 0
         self.seat: Seat | None = None  # set by the first /init_agent
+
+    def warm_up(self, steps: int = 5) -> None:
+        """Play a few steps of a throwaway game on every seat, so compiled kernels (numba, on a
+        fresh install) and the first forward passes run now, not in the first real move (which
+        the competition's runner gives 0.15 s); then forget that game. The seeding of real
+        games is unchanged."""
+        game = Game(TEAM)
+        for agent_id in range(NUM_AGENTS):
+            obs = game.reset(agent_id)
+            self.agent.reset(agent_id, TEAM.game_type, np.random.default_rng(0))
+            for _ in range(steps):
+                self.act(obs.select(agent_id))
+                obs, _, done, _ = game.step([0] * NUM_AGENTS)
+                if done:
+                    break
+        self.seat = None
+        self.games_started = 0
 
     def start_game(self, seat: Seat, rng: np.random.Generator | None = None) -> None:
         """Reset the agent for a new game on `seat`, with `rng` or the host's next game seed."""

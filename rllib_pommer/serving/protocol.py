@@ -38,6 +38,8 @@ def parse_body(raw: bytes) -> Mapping[str, Any]:
         body = json.loads(raw)
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise BadRequest(f"request body is not JSON ({exc})") from None
+    except RecursionError:
+        raise BadRequest("request body is nested too deeply") from None
     if not isinstance(body, dict):
         raise BadRequest(f"request body must be a JSON object, got {type(body).__name__}")
     return body
@@ -58,6 +60,8 @@ def _decoded(body: Mapping[str, Any], key: str, required: bool = True) -> Any:
         return json.loads(text)
     except json.JSONDecodeError as exc:
         raise BadRequest(f"field {key!r} does not hold JSON ({exc})") from None
+    except RecursionError:
+        raise BadRequest(f"field {key!r} is nested too deeply") from None
 
 
 def _integer(value: Any, key: str, allowed: range | None = None) -> int:
@@ -74,7 +78,8 @@ def rng_from_seed(seed: Any) -> np.random.Generator:
     """Our extension's `seed`: a non-negative integer (fed to `default_rng`) or a numpy
     bit-generator state object, which continues the caller's own stream exactly."""
     if isinstance(seed, dict):
-        cls = JSON_STATE_BIT_GENERATORS.get(seed.get("bit_generator"))
+        name = seed.get("bit_generator")
+        cls = JSON_STATE_BIT_GENERATORS.get(name) if isinstance(name, str) else None
         if cls is None:
             raise BadRequest(
                 f"field 'seed': bit generator {seed.get('bit_generator')!r} is not one of "
@@ -104,7 +109,7 @@ def parse_action(body: Mapping[str, Any], agent_id: int) -> Observation:
     obs = _decoded(body, "obs")
     try:
         observation = load_observation(obs, agent_id)
-    except ValueError as exc:
+    except (ValueError, OverflowError) as exc:
         raise BadRequest(str(exc)) from None
     # The only trace of the seat in an observation: catches two seats sharing one server.
     teammate, expected = obs.get("teammate"), teammate_of(agent_id, GameType.TEAM)

@@ -13,6 +13,7 @@ import requests
 from rllib_pommer.agents.registry import make_agent
 from rllib_pommer.serve import main as serve_main
 from rllib_pommer.serving.app import MAX_BODY_BYTES
+from rllib_pommer.serving.policy_host import PolicyHost, Seat
 
 from .conftest import obs_text, team_observations
 
@@ -94,6 +95,14 @@ INIT = {"id": "1", "game_type": "2"}
     ("action", {"obs": NO_BOARD}, "observation of agent 1: missing field 'board'"),
     ("action", {"obs": OFF_BOARD}, "observation of agent 1.position: value 11 outside [0, 10]"),
     ("episode_end", {"reward": "\"won\""}, "field 'reward' must encode a number"),
+    ("init_agent", {**INIT, "seed": "{\"bit_generator\": []}"}, "bit generator [] is not one of"),
+    ("action", {"obs": json.dumps({**json.loads(OBS), "ammo": 2**40})}, "ammo: value"),
+    ("action", {"obs": json.dumps({**json.loads(OBS), "blast_strength": 1e20})},
+     "blast_strength: expected an integer"),
+    ("action", {"obs": json.dumps({**json.loads(OBS), "step_count": 2**31})}, "step_count: value"),
+    ("action", {"obs": "5"}, "observation of agent 1: expected an object, got int"),
+    ("init_agent", ("[" * 30000 + "]" * 30000).encode(), "nested too deeply"),
+    ("action", {"obs": "[" * 30000 + "]" * 30000}, "nested too deeply"),
 ])
 def test_malformed_requests_get_400_naming_the_problem_and_the_server_keeps_going(
         serve, endpoint, body, message):
@@ -146,3 +155,14 @@ def test_the_command_serves_until_shutdown():
 def test_the_command_rejects_unknown_policies(capsys):
     assert serve_main(["--policy", "simpel"]) == 2
     assert "unknown policy 'simpel'" in capsys.readouterr().err
+
+
+def test_warming_up_leaves_the_served_games_unchanged():
+    """The warm-up plays throwaway games, then the host seeds real games as if it had not."""
+    observations = team_observations(SEAT, 20)
+    cold, warm = PolicyHost("random", seed=3), PolicyHost("random", seed=3)
+    warm.warm_up()
+    assert warm.seat is None and warm.games_started == 0
+    for host in (cold, warm):
+        host.start_game(Seat(SEAT, 2))
+    assert [cold.act(o) for o in observations] == [warm.act(o) for o in observations]
