@@ -138,7 +138,7 @@ def check_run_dir(out: Path, resume: bool) -> None:
     """Refuse, before any work, an --out that cannot be used: a new run over an existing one,
     or a resume without a run or with an unreadable experiment state. (Tune, given an empty state
     file, logs the error and starts the whole experiment again; a killed run can leave one.)"""
-    out = Path(out)
+    out = Path(out).resolve()  # Tune takes a relative path for a URI without a scheme
     if out.exists() and not out.is_dir():
         raise ValueError(f"--out {out} is a file, not a run directory")
     exists = tune.Tuner.can_restore(str(out))

@@ -6,6 +6,7 @@ import collections
 import os
 import pickle
 import socket
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,7 +14,7 @@ import pytest
 from rllib_pommer.rl.checkpoint_policy import MODULE_STATE, load_checkpoint_net
 from rllib_pommer.rl.config import build_config
 from rllib_pommer.rl.curriculum import load_curriculum
-from rllib_pommer.rl.training import init_ray
+from rllib_pommer.rl.training import check_run_dir, init_ray
 
 STAGE = '[[stage]]\nname = "a"\nopponent = "static"\nepisodes = 5\n'
 
@@ -112,3 +113,13 @@ def test_a_checkpoint_never_runs_code_and_bad_states_are_named(tmp_path, content
     for word in words:
         assert word in str(info.value)
     assert not (tmp_path / "pwned").exists()
+
+
+def test_run_folders_are_checked_by_relative_path_too(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    check_run_dir(Path("runs") / "new", resume=False)  # a new run: fine
+    with pytest.raises(ValueError, match="no run to resume"):
+        check_run_dir(Path("runs") / "new", resume=True)
+    (tmp_path / "file").write_text("")
+    with pytest.raises(ValueError, match="is a file"):
+        check_run_dir(Path("file"), resume=False)
