@@ -30,6 +30,7 @@ def main() -> int:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--opponents", nargs="+", default=list(OPPONENTS))
     parser.add_argument("--out", type=Path, required=True)
+    parser.add_argument("--workers", type=int, default=None, help="processes (default: cores)")
     args = parser.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
     team_name = Path(args.team).stem
@@ -43,6 +44,8 @@ def main() -> int:
                     str(args.seed), "--records", str(records), "--json"]
             if filters:
                 argv += ["--filters", ",".join(filters)]
+            if args.workers:
+                argv += ["--workers", str(args.workers)]
             print(f"== {stem}", flush=True)
             tmp = summary.with_suffix(".json.tmp")
             stdout = sys.stdout
