@@ -20,12 +20,10 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..agents.simple import new_memory, simple_action_counts, simple_actions
-from ..game.constants import NUM_AGENTS, TEAM, Action
-from ..game.engine import Games
+from ..agents.simple import simple_action_counts, simple_actions
+from ..game.constants import NUM_AGENTS, Action
 from ..game.observation import Observation
-from ..game.seeding import game_seeds
-from .expert import BATCH_GAMES, reset_memory
+from .expert import BATCH_GAMES, GameSlots
 from .schema import Samples
 
 OPPONENTS = ("simple", "static")
@@ -48,43 +46,28 @@ def play_dagger_games(seed: int, games: range, act: Actor, opponents: tuple[str,
         raise ValueError(f"DAgger opponents must be among {list(OPPONENTS)}, got {opponents}")
     if label_draws <= 0:
         raise ValueError(f"DAgger needs label draws, got {label_draws}")
-    engine = Games(min(batch_games, len(games)), TEAM)
-    slots = engine.num_games
-    memory = new_memory(NUM_AGENTS * slots, np.random.default_rng(0))  # reseeded per game
-    slot_game = np.full(slots, -1, np.int64)
-    slot_seed = np.zeros(slots, np.int64)
+    slots = min(batch_games, len(games))
     clone_seat = np.zeros((slots, NUM_AGENTS), bool)
     simple_seat = np.zeros((slots, NUM_AGENTS), bool)
-    upcoming = iter(games)
 
-    def start(free) -> None:
-        started = []
-        for slot, game in zip(free, upcoming, strict=False):
-            slot_seed[slot], rngs = game_seeds(seed, game)
-            slot_game[slot] = game
-            reset_memory(memory, slot, rngs)
-            opponent, seats = seating(game, opponents)
-            clone_seat[slot] = [s in seats for s in range(NUM_AGENTS)]
-            simple_seat[slot] = ~clone_seat[slot] & (opponent == "simple")
-            started.append(slot)
-        if started:
-            engine.reset(slot_seed[started], started)
-        slot_game[list(free)[len(started):]] = -1
+    def seat(slot: int, game: int) -> None:
+        opponent, seats = seating(game, opponents)
+        clone_seat[slot] = [s in seats for s in range(NUM_AGENTS)]
+        simple_seat[slot] = ~clone_seat[slot] & (opponent == "simple")
 
+    play = GameSlots(seed, games, batch_games, on_start=seat)
     recorded: list[Samples] = []
-    start(range(slots))
-    while (slot_game >= 0).any():
-        active = (engine.alive & ~engine.done[:, None]).ravel()
-        rows = engine.obs.agent_rows()
-        clone = np.flatnonzero(active & clone_seat.ravel())
-        counts = simple_action_counts(rows, memory, label_draws, active & clone_seat.ravel())
-        labels = simple_actions(rows, memory, active & (clone_seat | simple_seat).ravel())
+    while play.playing:
+        active = play.active()
+        rows = play.engine.obs.agent_rows()
+        clones = active & clone_seat.ravel()
+        counts = simple_action_counts(rows, play.memory, label_draws, clones)
+        labels = simple_actions(rows, play.memory, active & (clone_seat | simple_seat).ravel())
         actions = labels.copy()
         actions[~simple_seat.ravel()] = int(Action.STOP)
+        clone = np.flatnonzero(clones)
         if len(clone):
             actions[clone] = act(rows.select(clone))
-        recorded.append(Samples(rows, labels, np.repeat(slot_game, NUM_AGENTS),
-                                np.repeat(slot_seed, NUM_AGENTS), counts).take(clone))
-        engine.step(actions.reshape(-1, NUM_AGENTS))
-        start(np.flatnonzero(engine.done & (slot_game >= 0)))
+        recorded.append(play.samples(rows, labels, counts).take(clone))
+        play.step(actions)
     return Samples.concatenate(recorded)

@@ -19,6 +19,8 @@ from __future__ import annotations
 
 import tempfile
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import ray
@@ -76,8 +78,10 @@ def _steps_per_second(config, iterations: int) -> tuple[float, float]:
         algo.stop()
 
 
-def bench_train(iterations: int = 3, curriculum: str = "quick") -> dict:
-    """Env steps/s of PPO on the real and the zero-cost env, and their ratio."""
+@contextmanager
+def _random_pi_weights() -> Iterator[Path]:
+    """Ray running (started here unless it is already) and a random pi's weights file: speed
+    does not depend on the weights."""
     started_ray = not ray.is_initialized()
     if started_ray:
         init_ray(None)
@@ -85,16 +89,22 @@ def bench_train(iterations: int = 3, curriculum: str = "quick") -> dict:
         with tempfile.TemporaryDirectory() as tmp:
             weights = Path(tmp) / "pi.pt"
             torch.save(PommerNet().state_dict(), weights)
-            plan = load_curriculum(curriculum)
-            real, episode_length = _steps_per_second(
-                build_config(plan, pi_weights=weights, env=ENV_NAME), iterations)
-            zero_config = build_config(plan, pi_weights=weights, env=ZERO_COST_ENV)
-            zero_config.environment(env_config={**zero_config.env_config,
-                                                "episode_length": max(int(episode_length), 1)})
-            zero, _ = _steps_per_second(zero_config, iterations)
+            yield weights
     finally:
         if started_ray:
             ray.shutdown()
+
+
+def bench_train(iterations: int = 3, curriculum: str = "quick") -> dict:
+    """Env steps/s of PPO on the real and the zero-cost env, and their ratio."""
+    with _random_pi_weights() as weights:
+        plan = load_curriculum(curriculum)
+        real, episode_length = _steps_per_second(
+            build_config(plan, pi_weights=weights, env=ENV_NAME), iterations)
+        zero_config = build_config(plan, pi_weights=weights, env=ZERO_COST_ENV)
+        zero_config.environment(env_config={**zero_config.env_config,
+                                            "episode_length": max(int(episode_length), 1)})
+        zero, _ = _steps_per_second(zero_config, iterations)
     return {"curriculum": curriculum, "iterations": iterations,
             "mean_episode_length": round(float(episode_length), 1),
             "real_env_steps_per_s": round(real, 1), "zero_cost_env_steps_per_s": round(zero, 1),
@@ -126,20 +136,11 @@ def _learner_samples_per_s(algo, frozen: bool, updates: int) -> float:
 
 def bench_learner(updates: int = 3, curriculum: str = "quick") -> dict:
     """Learner samples/s of the real RLlib update, pi trainable and pi frozen."""
-    started_ray = not ray.is_initialized()
-    if started_ray:
-        init_ray(None)
-    try:
-        with tempfile.TemporaryDirectory() as tmp:
-            weights = Path(tmp) / "pi.pt"
-            torch.save(PommerNet().state_dict(), weights)
-            algo = build_config(load_curriculum(curriculum), pi_weights=weights).build_algo()
-            try:
-                trainable = _learner_samples_per_s(algo, False, updates)
-                frozen = _learner_samples_per_s(algo, True, updates)
-            finally:
-                algo.stop()
-    finally:
-        if started_ray:
-            ray.shutdown()
+    with _random_pi_weights() as weights:
+        algo = build_config(load_curriculum(curriculum), pi_weights=weights).build_algo()
+        try:
+            trainable = _learner_samples_per_s(algo, False, updates)
+            frozen = _learner_samples_per_s(algo, True, updates)
+        finally:
+            algo.stop()
     return {"ppo_samples_per_s": trainable, "ppo_frozen_pi_samples_per_s": frozen}
