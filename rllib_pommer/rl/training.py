@@ -218,7 +218,7 @@ def _checkpoint_number(path: Path) -> int:
 def pack_run(out: Path) -> dict:
     """Shrink the stopped run in `out` to what resuming and the report need (see above); safe to
     repeat. Returns what it kept: {trial name: newest checkpoint name}."""
-    out = Path(out)
+    out = Path(out).resolve()  # Tune takes a relative path for a URI without a scheme
     if not tune.Tuner.can_restore(str(out)):
         raise ValueError(f"--pack: no run in {out}")
     kept = {}

@@ -14,7 +14,7 @@ import pytest
 from rllib_pommer.rl.checkpoint_policy import MODULE_STATE, load_checkpoint_net
 from rllib_pommer.rl.config import build_config
 from rllib_pommer.rl.curriculum import load_curriculum
-from rllib_pommer.rl.training import check_run_dir, init_ray
+from rllib_pommer.rl.training import check_run_dir, init_ray, pack_run
 
 STAGE = '[[stage]]\nname = "a"\nopponent = "static"\nepisodes = 5\n'
 
@@ -123,3 +123,5 @@ def test_run_folders_are_checked_by_relative_path_too(tmp_path, monkeypatch):
     (tmp_path / "file").write_text("")
     with pytest.raises(ValueError, match="is a file"):
         check_run_dir(Path("file"), resume=False)
+    with pytest.raises(ValueError, match="--pack: no run in"):
+        pack_run(Path("runs") / "new")
