@@ -16,7 +16,7 @@ import hashlib
 import os
 import signal
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -25,7 +25,7 @@ import pyarrow.parquet as pq
 
 from ..game.constants import TEAM
 from ..parallel import map_unordered
-from .dagger import OPPONENTS, play_dagger_games
+from .dagger import check_setup, play_dagger_games
 from .expert import play_games
 from .schema import (
     SHARD_GLOB,
@@ -63,19 +63,14 @@ def _sha256(path: Path) -> str:
 
 
 def plan_shards(games: int, seed: int, shard_games: int, label_draws: int = 0,
-                dagger: Dagger | None = None) -> list[ShardMeta]:
+                dagger: Dagger | None = None) -> ShardPlan:
     if games <= 0 or shard_games <= 0:
         raise ValueError(f"games and shard_games must be positive, got {games}, {shard_games}")
     if not 0 <= label_draws < 256:
         raise ValueError(f"label_draws must be in 0..255, got {label_draws}")
     players = {}
     if dagger is not None:
-        if not label_draws:
-            raise ValueError("DAgger data need --label-draws (the expert's labels)")
-        unknown = sorted(set(dagger.opponents) - set(OPPONENTS))
-        if unknown or not dagger.opponents:
-            raise ValueError(f"DAgger opponents {list(dagger.opponents)}: each must be one of "
-                             f"{list(OPPONENTS)}")
+        check_setup(dagger.opponents, label_draws)
         from ..learned import greedy_actor  # torch, for DAgger only
 
         _, weights = greedy_actor(dagger.policy)
@@ -195,7 +190,10 @@ class Collection:
 
     @property
     def missing(self) -> list[int]:
-        return [i for i in range(len(self.plan)) if i not in self.results]
+        return list(self._missing())
+
+    def _missing(self) -> Iterator[int]:
+        return (i for i in range(len(self.plan)) if i not in self.results)
 
     def run(self, workers: int | None = None,
             progress: Callable[[ShardResult], None] | None = None) -> dict[int, ShardResult]:
@@ -204,8 +202,7 @@ class Collection:
         for stale in self.out_dir.glob(TEMP_GLOB):
             stale.unlink()
         workers = min(workers or os.cpu_count() or 1, max(1, len(self.plan) - len(self.results)))
-        missing = (i for i in range(len(self.plan)) if i not in self.results)
-        jobs = ((self.out_dir, i, self.plan[i]) for i in missing)
+        jobs = ((self.out_dir, i, self.plan[i]) for i in self._missing())
         for (_, index, _), result in map_unordered(_write, jobs, workers, _die_with_parent):
             self.results[index] = result
             if progress:

@@ -38,14 +38,20 @@ def seating(game: int, opponents: tuple[str, ...]) -> tuple[str, tuple[int, int]
     return opponents[game % cycle], TEAM_SEATS[(game // cycle) % 2]
 
 
+def check_setup(opponents: tuple[str, ...], label_draws: int) -> None:
+    """ValueError unless DAgger can be played against `opponents` with these label draws."""
+    if label_draws <= 0:
+        raise ValueError("DAgger data need --label-draws (the expert's labels)")
+    unknown = sorted(set(opponents) - set(OPPONENTS))
+    if unknown or not opponents:
+        raise ValueError(f"DAgger opponents {list(opponents)}: each must be one of "
+                         f"{list(OPPONENTS)}")
+
+
 def play_dagger_games(seed: int, games: range, act: Actor, opponents: tuple[str, ...],
                       label_draws: int, batch_games: int = BATCH_GAMES) -> Samples:
     """The clone's decisions in games `games`, labelled by its shadow SimpleAgents."""
-    unknown = sorted(set(opponents) - set(OPPONENTS))
-    if unknown or not opponents:
-        raise ValueError(f"DAgger opponents must be among {list(OPPONENTS)}, got {opponents}")
-    if label_draws <= 0:
-        raise ValueError(f"DAgger needs label draws, got {label_draws}")
+    check_setup(opponents, label_draws)
     slots = min(batch_games, len(games))
     clone_seat = np.zeros((slots, NUM_AGENTS), bool)
     simple_seat = np.zeros((slots, NUM_AGENTS), bool)

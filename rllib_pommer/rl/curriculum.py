@@ -24,6 +24,7 @@ file, the key and the valid choices, so a typo fails before Ray starts.
 from __future__ import annotations
 
 import sys
+import typing
 from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
@@ -130,9 +131,9 @@ def _check_type(where: str, key: str, value: Any, kind: type, positive: bool = F
     written as an integer."""
     fits = (type(value) is kind or (kind is float and type(value) is int))
     if not fits or (positive and not value > 0):
-        noun = {bool: "true or false", int: "integer", float: "number", str: "string"}[kind]
-        wanted = f"a positive {noun}" if positive else noun if kind is bool else f"a {noun}"
-        wanted = "an integer" if wanted == "a integer" else wanted
+        wanted = ("a positive integer" if positive else
+                  {bool: "true or false", int: "an integer", float: "a number",
+                   str: "a string"}[kind])
         raise ValueError(f"{where}: {key} must be {wanted}, got {value!r}")
 
 
@@ -166,11 +167,9 @@ def _stage(where: str, table: dict) -> Stage:
     for key in ("name", "opponent", "episodes"):
         if key not in table:
             raise ValueError(f"{where}: missing key {key!r}")
-    for field in fields(Stage):
-        if field.name in table:
-            kind = {"str": str, "int": int, "float": float, "bool": bool}[str(field.type)]
-            _check_type(where, field.name, table[field.name], kind,
-                        positive=field.name == "episodes")
+    for key, kind in typing.get_type_hints(Stage).items():
+        if key in table:
+            _check_type(where, key, table[key], kind, positive=key == "episodes")
     stage = Stage(**table)
     if stage.reward not in REWARD_MODES:
         raise ValueError(f"{where}: reward {stage.reward!r} is not one of {list(REWARD_MODES)}")

@@ -224,8 +224,7 @@ def pack_run(out: Path) -> dict:
     kept = {}
     for trial in sorted(p for p in out.iterdir() if (p / "params.json").is_file()):
         checkpoints = sorted(trial.glob("checkpoint_*"), key=_checkpoint_number)
-        write_summary(trial, trial, HISTORY_FILE + ".tmp")
-        os.replace(trial / (HISTORY_FILE + ".tmp"), trial / HISTORY_FILE)
+        write_summary(trial, trial, HISTORY_FILE)
         results = trial / "result.json"
         if results.is_file():  # Tune reads the last result when it restores the trial
             last = [line for line in results.read_text().splitlines() if line.strip()][-1:]
@@ -237,7 +236,7 @@ def pack_run(out: Path) -> dict:
             elif stale.exists():
                 stale.unlink()
         kept[trial.name] = checkpoints[-1].name if checkpoints else None
-    for pattern in ("experiment_state-*.json", "basic-variant-state-*.json"):
+    for pattern in STATE_PATTERNS:
         for stale in sorted(out.glob(pattern))[:-1]:  # one per start; Tune reads the newest
             stale.unlink()
     return kept

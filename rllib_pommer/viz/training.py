@@ -34,6 +34,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import os
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -142,17 +143,20 @@ def read_trial(trial: Trial | Path) -> Trial:
 
 def write_summary(trial: Trial | Path, out: Path, name: str = "progress.csv") -> Path:
     """`out`/`name`: the trial's rows (restores resolved), only the columns the curve is drawn
-    from and those of `SUMMARY_COLUMNS` it has."""
+    from and those of `SUMMARY_COLUMNS` it has; written whole or not at all (it may replace the
+    file the rows were read from)."""
     rows = read_trial(trial).rows
     curve = [_column(rows, names) for names in (RETURN_COLUMNS, LIFETIME_COLUMNS,
                                                 PER_ITERATION_COLUMNS)]
     columns = list(dict.fromkeys(c for c in [*SUMMARY_COLUMNS, *curve, *STAGE_COLUMNS]
                                  if c and any(c in row for row in rows)))
     out.mkdir(parents=True, exist_ok=True)
-    with open(out / name, "w", newline="") as f:
+    partial = out / f".{name}.tmp"
+    with open(partial, "w", newline="") as f:
         writer = csv.DictWriter(f, columns, extrasaction="ignore")
         writer.writeheader()
         writer.writerows(rows)
+    os.replace(partial, out / name)
     return out
 
 
