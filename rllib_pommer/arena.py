@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Callable, Iterator, Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from functools import partial
 
 import numpy as np
@@ -41,6 +41,7 @@ from .game.state import (
 )
 from .learned import LearnedAgent
 from .parallel import map_unordered
+from .rates import wilson
 
 SEATS_A = ((0, 2), (1, 3))
 
@@ -73,6 +74,10 @@ class GameRecord:
     died: list[bool]  # by seat
     own_bomb_deaths: list[bool]  # by seat
     bombs_laid: list[int]  # by seat
+    # The match, so a records file names what it holds (the report reads it from the rows).
+    team: str = ""
+    vs: str = ""
+    filters: list[str] = field(default_factory=list)
 
 
 def seats_of_team_a(spec: MatchSpec, game: int) -> tuple[int, int]:
@@ -203,7 +208,7 @@ def _play_chunk(spec: MatchSpec, games: Sequence[int],
         records.append(GameRecord(
             g, spec.seed, list(seats_a), result, int(stats.length[i]),
             (state.agents[i, :, A_ALIVE] == 0).tolist(), stats.own_bomb_deaths[i].tolist(),
-            stats.bombs_laid[i].tolist()))
+            stats.bombs_laid[i].tolist(), spec.team, spec.vs, list(spec.filters)))
     return records, [recorders[i].finish() for i in sorted(recorders)]
 
 
@@ -255,16 +260,6 @@ def record_games(spec: MatchSpec, count: int, observations: bool = False) -> lis
         games = range(start, min(start + chunk_games, count, spec.games))
         replays += _play_chunk(spec, games, observations)[1]
     return replays
-
-
-def wilson(successes: int, n: int, z: float = 1.96) -> tuple[float, float]:
-    """95% Wilson score interval of a rate (the reference statistics use it too)."""
-    if n == 0:
-        return (0.0, 1.0)
-    p = successes / n
-    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
-    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
-    return (max(0.0, centre - half), min(1.0, centre + half))  # rounding can cross 0 or 1
 
 
 def summarise(records: Sequence[GameRecord]) -> dict:

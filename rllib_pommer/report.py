@@ -5,8 +5,9 @@ Each input is classified by its content:
 
 - a directory: the Tune trial directories in or below it (progress.csv or result.json) give
   Fig. 3, the training reward per curriculum phase (columns: rllib_pommer/viz/training.py);
-- a .jsonl or .csv file of arena rows (`evaluate --records`; its match is named by a sidecar
-  .json or by its file name, see rllib_pommer/viz/matches.py) gives the win/loss/tie tables in
+- a .jsonl or .csv file of arena rows (`evaluate --records`, whose rows name their match; older
+  files: a sidecar .json or the file name, see rllib_pommer/viz/matches.py) gives the
+  win/loss/tie tables, with 95% intervals, in
   the layout of the paper's Tables 2 and 3 beside the paper's numbers, and Fig. 4, the effect of
   the filters;
 - a .jsonl[.gz] file of game replays (`evaluate --record K`) gives Fig. 5, the position and bomb
@@ -17,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import re
 import sys
 from collections import Counter
 from collections.abc import Iterator
@@ -25,6 +27,7 @@ from pathlib import Path
 from .game.records import read_games
 from .viz.behaviour import heatmaps_by_opponent
 from .viz.figures import (
+    FIG5_MARKS,
     comparable_opponents,
     plot_behaviour,
     plot_filter_effects,
@@ -36,6 +39,8 @@ from .viz.paper import paper_table
 from .viz.render import render_game
 from .viz.tables import results_table, training_table
 from .viz.training import (
+    RLLIB_WINDOW,
+    WINDOW,
     find_trials,
     read_trial,
     stage_figures,
@@ -44,6 +49,7 @@ from .viz.training import (
 )
 from .viz.viewer import write_viewer
 
+UNSAFE_IN_NAMES = re.compile(r"[^\w.-]+")
 SUMMARIES = "runs"  # below the report's folder: one small trial folder per run of Fig. 3
 
 
@@ -76,13 +82,14 @@ def classify(paths: list[Path]) -> dict[str, list[Path]]:
 def _tables_and_fig4(records: list[Path], out: Path) -> Iterator[str]:
     outcomes = load_outcomes(records)
     yield "## Win / loss / tie (the paper's Tables 2 and 3)"
-    yield ("Each cell: team A's win / loss / tie rates; ours over n games, the paper's over 1000 "
-           "games below. Variants add jitter correction and/or the action filter.")
+    yield ("Each cell: team A's win / loss / tie rates; ours over n games with their 95% Wilson "
+           "intervals below them, the paper's over 1000 games last. Variants add jitter "
+           "correction and/or the action filter.")
     for team in sorted({match.team for match in outcomes}):
         yield results_table(team, outcomes)
         ours = rates_by_opponent(outcomes, team)
         if comparable_opponents(ours):
-            name = f"fig4_filters_{team}.png"
+            name = f"fig4_filters_{UNSAFE_IN_NAMES.sub('_', team)}.png"  # a team may be a path
             paper = (paper_table(team) or ("", {}))[1]
             plot_filter_effects(ours, paper, f"Fig. 4: effect of the filters on {team}", out / name)
             yield f"![Fig. 4 for {team}]({name})"
@@ -98,6 +105,10 @@ def _fig3(paths: list[Path], out: Path) -> Iterator[str]:
     yield "## Training reward (the paper's Fig. 3)"
     yield f"From {len(paths)} trial(s): " + ", ".join(f"`{path}`" for path in paths)
     yield "![Fig. 3](fig3_training.png)"
+    yield (f"One axis per reward kind (shaped and raw returns are not on one scale). Each "
+           f"iteration logs RLlib's mean return of the learner's last {RLLIB_WINDOW} episodes; "
+           f"a curve averages those over the last {WINDOW:,} episodes (each iteration weighted "
+           f"by the episodes it finished), restarted at each phase.")
     yield training_table([f for trial in trials for f in stage_figures(trial)])
     yield (f"Each run's curve and training figures per iteration are in `{SUMMARIES}/<run>/"
            f"progress.csv` (a trial folder this report reads again).")
@@ -108,6 +119,7 @@ def _fig5_and_game(replays: list[Path], out: Path) -> Iterator[str]:
     plot_behaviour(maps, out / "fig5_behaviour.png")
     yield "## Positions and bomb placements (the paper's Fig. 5)"
     yield "![Fig. 5](fig5_behaviour.png)"
+    yield FIG5_MARKS.replace("\n", " ")
     first = load_game(replays[0])
     render_game(first, out / "game.png")
     write_viewer(first, out / "game.html")

@@ -52,7 +52,8 @@ def test_cli_prints_summary_and_writes_records(tmp_path, capsys):
     rows = [json.loads(line) for line in jsonl.read_text().splitlines()]
     assert [r["game"] for r in rows] == [0, 1, 2, 3]
     assert set(rows[0]) == {"game", "seed", "seats_a", "result", "length", "died",
-                            "own_bomb_deaths", "bombs_laid"}
+                            "own_bomb_deaths", "bombs_laid", "team", "vs", "filters"}
+    assert (rows[0]["team"], rows[0]["vs"], rows[0]["filters"]) == ("simple", "static", [])
     assert main([*args, "--records", str(table)]) == 0
     with open(table) as f:
         assert [int(r["length"]) for r in csv.DictReader(f)] == [r["length"] for r in rows]

@@ -4,10 +4,10 @@ Every seat is mirrored so that it starts top-left like agent 0 (agent 1 starts b
 bottom-right, 3 top-right). A bomb placement is a bomb of that bomber with life 9 in a state: bombs
 are laid with life 10 and tick in the same step, so only a bomb laid on that step shows 9.
 
-Whose agents are "ours" and who the opponent is come from the replay's keys `seats_a` and `vs`
-when present. Otherwise `agent_mix` is read as the arena writes it (four policy names by seat)
-with the arena's seat rule (team A on {0, 2} in even games, {1, 3} in odd ones); without a
-`game` key, team A is taken to sit on {0, 2}.
+Whose agents are "ours", which policy they play and who the opponent is come from the replay's
+keys `seats_a`, `team` (with `filters`) and `vs` when present. Otherwise `agent_mix` is read as
+the arena writes it (four policy names by seat) with the arena's seat rule (team A on {0, 2} in
+even games, {1, 3} in odd ones); without a `game` key, team A is taken to sit on {0, 2}.
 """
 
 from __future__ import annotations
@@ -53,6 +53,14 @@ def seats_and_opponent(record: dict) -> tuple[tuple[int, ...], str]:
     return seats, names[other] if len(names) == 4 else str(record.get("agent_mix", "?"))
 
 
+def team_name(record: dict, seats: tuple[int, ...]) -> str:
+    """Team A's policy in a replay, with its filters as the arena names them (`ppo+jitter`)."""
+    if "team" in record:
+        return "+".join([str(record["team"]), *record.get("filters", [])])
+    names = str(record.get("agent_mix", "")).split()
+    return names[seats[0]] if len(names) == 4 else "?"
+
+
 def add_game(maps: Heatmaps, record: dict, seats: Iterable[int]) -> None:
     """Count the positions of `seats` in every state and their freshly laid bombs."""
     seats = tuple(seats)
@@ -68,13 +76,14 @@ def add_game(maps: Heatmaps, record: dict, seats: Iterable[int]) -> None:
     maps.games += 1
 
 
-def heatmaps_by_opponent(records: Iterable[dict],
-                         games_per_opponent: int = GAMES_PER_OPPONENT) -> dict[str, Heatmaps]:
-    """Heatmaps of team A against each opponent, over its first `games_per_opponent` games."""
-    by_opponent: dict[str, Heatmaps] = {}
+def heatmaps_by_opponent(records: Iterable[dict], games_per_opponent: int = GAMES_PER_OPPONENT
+                         ) -> dict[tuple[str, str], Heatmaps]:
+    """Heatmaps of team A by (team A's policy, opponent), over the first `games_per_opponent`
+    games of each pair."""
+    by_match: dict[tuple[str, str], Heatmaps] = {}
     for record in records:
         seats, opponent = seats_and_opponent(record)
-        maps = by_opponent.setdefault(opponent, Heatmaps())
+        maps = by_match.setdefault((team_name(record, seats), opponent), Heatmaps())
         if maps.games < games_per_opponent:
             add_game(maps, record, seats)
-    return by_opponent
+    return by_match

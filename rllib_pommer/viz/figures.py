@@ -17,7 +17,7 @@ from matplotlib.patches import Patch
 from .behaviour import Heatmaps
 from .matches import VARIANTS
 from .paper import PAPER_OPPONENTS
-from .training import TrainingCurve, phases
+from .training import RLLIB_WINDOW, WINDOW, TrainingCurve, phases
 
 DPI = 120
 # (name, index in a (win, loss, tie) cell, colour), in the order the bars are drawn.
@@ -25,27 +25,46 @@ OUTCOMES = (("win", 0, "#2e9e4f"), ("tie", 2, "#9a9a9a"), ("loss", 1, "#d43434")
 Rates = dict[str, dict[str, tuple[float, float, float]]]  # opponent -> variant -> cell
 
 
-def plot_training(curves: list[TrainingCurve], out: Path) -> None:
-    """Fig. 3: each run's 1000-episode rolling mean return, one segment per curriculum phase,
-    with the phase names at their starts."""
-    fig = Figure(figsize=(9, 4.8), layout="constrained")
-    ax = fig.add_subplot()
+# Reward kind -> the axis' name; one axis each, so shaped and raw returns are never compared on
+# one scale. "" is a run that did not log its kind.
+REWARD_AXES = {"shaped": "shaped", "raw": "raw (game outcome only)", "": "kind not logged"}
+
+
+def plot_training(curves: list[TrainingCurve], out: Path) -> Figure:
+    """Fig. 3: each run's learner return, one axis per reward kind, one segment per curriculum
+    phase with the phase names at their starts (what the mean is over: viz/training.py)."""
+    kinds = [kind for kind in REWARD_AXES if any(kind in curve.rewards for curve in curves)]
+    unknown = sorted({kind for curve in curves for kind in curve.rewards} - set(REWARD_AXES))
+    if unknown:
+        raise ValueError(f"Fig. 3: unknown reward kind(s) {unknown}; known: {list(REWARD_AXES)}")
+    kinds = kinds or [""]
+    fig = Figure(figsize=(9, 1.2 + 3.6 * len(kinds)), layout="constrained")
+    axes = dict(zip(kinds, fig.subplots(len(kinds), 1, sharex=True, squeeze=False)[:, 0],
+                    strict=True))
     for k, curve in enumerate(curves):
         colour = f"C{k % 10}"
-        for start, end, stage in phases(curve.stages):
+        labelled = set()
+        for start, end, (stage, kind) in phases(list(zip(curve.stages, curve.rewards,
+                                                         strict=True))):
+            ax = axes[kind]
             ax.plot(curve.episodes[start:end], curve.returns[start:end], color=colour,
-                    label=curve.name if start == 0 else None)
+                    label=None if kind in labelled else curve.name)
+            labelled.add(kind)
             if stage:
                 ax.axvline(curve.episodes[start], color=colour, linestyle=":", linewidth=1)
                 ax.annotate(stage, (curve.episodes[start], 0.98), rotation=90, ha="right",
                             va="top", fontsize=8, color=colour,
                             xycoords=("data", "axes fraction"))
-    ax.set_xlabel("training episodes")
-    ax.set_ylabel("episode return (1000-episode rolling mean)")
-    ax.set_title("Fig. 3: training reward per curriculum phase")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="best")
+    for kind, ax in axes.items():
+        ax.set_title(f"{REWARD_AXES[kind]} reward", fontsize=10)
+        ax.set_ylabel(f"learner's return: {WINDOW:,}-episode\nmean of RLlib's "
+                      f"{RLLIB_WINDOW}-episode means")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, loc="best")
+    axes[kinds[-1]].set_xlabel("training episodes (lifetime)")
+    fig.suptitle("Fig. 3: training reward per curriculum phase")
     fig.savefig(out, dpi=DPI)
+    return fig
 
 
 def _change(cells: dict, variant: str, index: int) -> float:
@@ -94,23 +113,31 @@ def plot_filter_effects(ours: Rates, paper: Rates, title: str, out: Path) -> Non
     fig.savefig(out, dpi=DPI)
 
 
-def plot_behaviour(maps: dict[str, Heatmaps], out: Path) -> None:
-    """Fig. 5: per opponent, where our agents stood and where they laid bombs, as shares of all
-    their steps and bombs, every seat mirrored to start top-left (circled)."""
-    fig = Figure(figsize=(7.4, 3.3 * len(maps) + 0.4), layout="constrained")
+FIG5_MARKS = ("Every seat is mirrored to start top-left; the blue circle marks that start cell.\n"
+              "Colour: the cell's share of all the team's agent-steps (left) or of all its bombs "
+              "(right), in %.")
+
+
+def plot_behaviour(maps: dict[tuple[str, str], Heatmaps], out: Path) -> Figure:
+    """Fig. 5: per (our policy, opponent), where our agents stood and where they laid bombs, as
+    shares of all their steps and bombs, every seat mirrored to start top-left (circled)."""
+    fig = Figure(figsize=(7.4, 3.3 * len(maps) + 0.8), layout="constrained")
     axes = fig.subplots(len(maps), 2, squeeze=False)
-    for row, (vs, heatmaps) in zip(axes, maps.items(), strict=True):
+    for row, ((team, vs), heatmaps) in zip(axes, maps.items(), strict=True):
         for ax, counts, what in ((row[0], heatmaps.positions, "positions"),
                                  (row[1], heatmaps.bombs, "bomb placements")):
             image = ax.imshow(100 * counts / max(counts.sum(), 1), cmap="magma")
             ax.plot(1, 1, marker="o", markersize=12, markerfacecolor="none",
                     markeredgecolor="#4fc3f7")
-            ax.set_title(f"vs {PAPER_OPPONENTS.get(vs, vs)}: {what}\n"
+            ax.set_title(f"{team} vs {PAPER_OPPONENTS.get(vs, vs)}: {what}\n"
                          f"{heatmaps.games} games, {counts.sum()} in all", fontsize=9)
             ax.set_xticks(np.arange(-0.5, counts.shape[1]), minor=True)
             ax.set_yticks(np.arange(-0.5, counts.shape[0]), minor=True)
             ax.grid(which="minor", color="#444", linewidth=0.5)
             ax.tick_params(which="both", length=0, labelbottom=False, labelleft=False)
             fig.colorbar(image, ax=ax, shrink=0.85, label=f"% of {what}")
-    fig.suptitle("Fig. 5: our agents' positions and bomb placements")
+    teams = ", ".join(dict.fromkeys(team for team, _ in maps))
+    fig.suptitle(f"Fig. 5: positions and bomb placements of {teams}")
+    fig.supxlabel(FIG5_MARKS, fontsize=8)
     fig.savefig(out, dpi=DPI)
+    return fig

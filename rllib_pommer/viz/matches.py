@@ -1,11 +1,14 @@
 """Arena record files (`evaluate --records`, one row per game) and which match each one holds.
 
-The rows do not name the policies, so a file's match comes from, first found:
+A file's match comes from, first found:
 
 1. a sidecar `<file without suffix>.json` holding evaluate's `--json` summary line, whose keys
-   `team`, `vs` and `filters` are used (`evaluate ... --records m.jsonl --json | tail -1 > m.json`);
-2. the file name `<team>[+<filter>...]__vs__<opponent>.jsonl` (or `.csv`), e.g.
-   `ppo+jitter+action__vs__simple_nobomb.jsonl`.
+   `team`, `vs` and `filters` are used (`evaluate ... --records m.jsonl --json | tail -1 > m.json`;
+   it may rename a team, as `benchmarks/paper_table.py` does);
+2. the rows themselves: their `team`, `vs` and `filters` columns, which `evaluate --records`
+   writes (all rows of a file must agree);
+3. the file name `<team>[+<filter>...]__vs__<opponent>.jsonl` (or `.csv`), e.g.
+   `ppo+jitter+action__vs__simple_nobomb.jsonl`, for records written before the rows named it.
 
 A team name may also carry the registry's filter suffixes (`ppo_jitter_action`); they count as
 filters. The variant of a match is its filter set in the paper's column names: `vanilla`,
@@ -21,6 +24,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..agents.registry import FILTER_SUFFIXES, FILTERS
+from ..rates import wilson
 
 VARIANTS = ("vanilla", "jitter", "action", "jitter_action")
 NAME_SEPARATOR = "__vs__"
@@ -50,6 +54,10 @@ class Outcomes:
     def rates(self) -> tuple[float, float, float]:
         return self.win / self.games, self.loss / self.games, self.tie / self.games
 
+    def intervals(self) -> tuple[tuple[float, float], ...]:
+        """95% Wilson intervals of the win, loss and tie rates, each within [0, 1]."""
+        return tuple(wilson(k, self.games) for k in (self.win, self.loss, self.tie))
+
 
 def read_rows(path: Path) -> list[dict]:
     """Rows of a .jsonl or .csv records file (list columns of a .csv are JSON text)."""
@@ -72,18 +80,38 @@ def variant_of(team: str, filters: Iterable[str]) -> tuple[str, str]:
     return team, "_".join(f for f in FILTERS if f in wanted) or "vanilla"
 
 
-def match_of(path: Path) -> Match:
+def _named_by_rows(path: Path, rows: list[dict]) -> tuple[str, str, list[str]] | None:
+    """(team, vs, filters) from the rows' own columns, or None if they do not name them."""
+    names = {(row.get("team") or "", row.get("vs") or "",
+              json.dumps(_listed(row.get("filters") or []))) for row in rows}
+    if len(names) > 1:
+        raise ValueError(f"{path}: rows of more than one match {sorted(names)[:2]}; "
+                         f"write one match per file")
+    team, vs, filters = names.pop() if names else ("", "", "[]")
+    return (team, vs, json.loads(filters)) if team and vs else None
+
+
+def _listed(value) -> list:
+    """A list column: a list in .jsonl, its JSON text in .csv."""
+    return json.loads(value) if isinstance(value, str) else list(value)
+
+
+def match_of(path: Path, rows: list[dict] | None = None) -> Match:
+    """The match of a records file (module docstring); `rows`: its rows, if already read."""
     sidecar = path.with_suffix(".json")
     if sidecar.is_file():
         summary = json.loads(sidecar.read_text().strip().splitlines()[-1])
         if not {"team", "vs"} <= set(summary):
             raise ValueError(f"{sidecar}: an evaluate --json summary needs 'team' and 'vs'")
         team, vs, filters = summary["team"], summary["vs"], summary.get("filters", [])
+    elif named := _named_by_rows(path, read_rows(path) if rows is None else rows):
+        team, vs, filters = named
     elif NAME_SEPARATOR in path.stem:
         left, vs = path.stem.split(NAME_SEPARATOR, 1)
         team, *filters = left.split("+")
     else:
-        raise ValueError(f"{path}: cannot tell which match it holds; add a sidecar "
+        raise ValueError(f"{path}: cannot tell which match it holds (its rows have no team "
+                         f"and vs: written by an older evaluate?); add a sidecar "
                          f"{sidecar.name} (evaluate --json) or name it "
                          f"<team>[+<filter>...]{NAME_SEPARATOR}<opponent>{path.suffix}")
     base, variant = variant_of(team, filters)
@@ -94,8 +122,9 @@ def load_outcomes(paths: Iterable[Path]) -> dict[Match, Outcomes]:
     """Team A's results per match, over all the files of each match."""
     results: dict[Match, Outcomes] = {}
     for path in paths:
-        outcomes = results.setdefault(match_of(path), Outcomes())
-        for row in read_rows(path):
+        rows = read_rows(path)
+        outcomes = results.setdefault(match_of(path, rows), Outcomes())
+        for row in rows:
             if row["result"] not in ("win", "loss", "tie"):
                 raise ValueError(f"{path}: result {row['result']!r} is not win, loss or tie")
             setattr(outcomes, row["result"], getattr(outcomes, row["result"]) + 1)

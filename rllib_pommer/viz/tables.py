@@ -1,5 +1,6 @@
 """Win/loss/tie tables in the paper's layout (Tables 2 and 3): rows are opponents, columns the
-four variants, each cell win / loss / tie; ours over n games, the paper's (1000 games) below. And
+four variants, each cell win / loss / tie; ours over n games with their 95% Wilson intervals, the
+paper's (1000 games) below. And
 the training table: what each curriculum phase of each run cost and how the learner did."""
 
 from __future__ import annotations
@@ -15,6 +16,10 @@ def _rates(cell) -> str:
     return " / ".join(f"{x:.3f}" for x in cell)
 
 
+def _intervals(intervals) -> str:
+    return " / ".join(f"[{low:.3f}, {high:.3f}]" for low, high in intervals)
+
+
 def results_table(team: str, results: dict[Match, Outcomes]) -> str:
     """The Markdown table of `team` (policy name without filters), beside the paper's if any."""
     ours = {(m.vs, m.variant): o for m, o in results.items() if m.team == team}
@@ -27,7 +32,8 @@ def results_table(team: str, results: dict[Match, Outcomes]) -> str:
         cells = []
         for variant in VARIANTS:
             mine = ours.get((vs, variant))
-            text = f"{_rates(mine.rates())} (n={mine.games})" if mine else "—"
+            text = (f"{_rates(mine.rates())} (n={mine.games})<br>{_intervals(mine.intervals())}"
+                    if mine else "—")
             paper = paper_rows.get(vs, {}).get(variant)
             cells.append(text + (f"<br>paper {_rates(paper)}" if paper else ""))
         lines.append(f"| {PAPER_OPPONENTS.get(vs, vs)} (`{vs}`) | " + " | ".join(cells) + " |")

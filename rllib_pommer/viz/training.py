@@ -16,12 +16,16 @@ resumed) is skipped with a warning naming the file and line. Columns used:
 - the curriculum phase: `curriculum/iteration_stage_name` (what `python -m rllib_pommer.train`
   logs: the stage the iteration played in), `curriculum/stage_name` (older runs: the stage in
   force after it, so the iteration that ends a stage counts in the next), `curriculum_stage` or
-  `curriculum_kind` (optional; without it the run is one phase).
+  `curriculum_kind` (optional; without it the run is one phase);
+- the kind of return, `shaped` or `raw`: `curriculum/iteration_reward` (logged since the report
+  drew one axis per kind); in older rows, the env's reward in the trial's `params.json` (the
+  first stage's, right for every shipped curriculum, whose stages share one reward); else unknown.
 
-Rows without a return (empty or NaN: no episode finished yet) are skipped. Each row's mean is
-taken as the mean of the episodes it counts, which turns iterations into a per-episode series; the
-curve is its rolling mean over the last 1000 episodes, restarted at each phase change so a phase's
-curve never mixes opponents.
+Rows without a return (empty or NaN: no episode finished yet) are skipped. A row's return is what
+RLlib logs: the mean over the last `RLLIB_WINDOW` episodes (its default smoothing window), not
+over the iteration's own episodes. The curve weights each row by the episodes its iteration
+finished and averages the last `WINDOW` episodes' worth, restarted at each phase change so a
+phase's curve never mixes opponents: a mean of 100-episode means spanning about 1,100 episodes.
 
 `write_summary` keeps a trial's curve columns and `SUMMARY_COLUMNS` in a small progress.csv (a
 few hundred bytes per iteration instead of a result.json's ~25 KB), itself a trial directory this
@@ -47,6 +51,7 @@ LIFETIME_COLUMNS = ("env_runners/num_episodes_lifetime", "num_episodes_lifetime"
 PER_ITERATION_COLUMNS = ("env_runners/num_episodes", "episodes_this_iter")
 STAGE_COLUMNS = ("curriculum/iteration_stage_name", "curriculum/stage_name", "curriculum_stage",
                  "curriculum_kind")
+REWARD_COLUMN = "curriculum/iteration_reward"
 HISTORY_FILE = "history.csv"
 TRIAL_FILES = ("result.json", "progress.csv", HISTORY_FILE)
 # Kept by `write_summary` beside the columns the curve is drawn from (what our trainer logs).
@@ -56,6 +61,7 @@ SUMMARY_COLUMNS = (
     "env_runners/learner_tie", "env_runners/learner_override_share",
     "env_runners/episode_len_mean", "learners/learner/vf_explained_var")
 WINDOW = 1000
+RLLIB_WINDOW = 100  # RLlib's metrics_num_episodes_for_smoothing, which our config leaves as is
 
 
 @dataclass
@@ -66,6 +72,7 @@ class TrainingCurve:
     episodes: np.ndarray
     returns: np.ndarray
     stages: list[str]
+    rewards: list[str]  # per row: "shaped", "raw" or "" (not known)
 
 
 def run_name(trial: Path) -> str:
@@ -122,7 +129,19 @@ def read_rows(trial: Path) -> list[dict]:
         rows += _json_rows(trial / "result.json")
     elif (trial / "progress.csv").is_file():
         rows += _csv_rows(trial / "progress.csv")
-    return without_discarded(rows)
+    started_with = _started_reward(trial)
+    return [row if row.get(REWARD_COLUMN) or not started_with
+            else {**row, REWARD_COLUMN: started_with} for row in without_discarded(rows)]
+
+
+def _started_reward(trial: Path) -> str:
+    """The env's reward mode the trial started with, from Tune's params.json ("" if unknown)."""
+    try:
+        params = json.loads((trial / "params.json").read_text())
+    except (OSError, ValueError):
+        return ""
+    reward = params.get("env_config", {}).get("reward") if isinstance(params, dict) else None
+    return reward if isinstance(reward, str) else ""
 
 
 @dataclass
@@ -148,7 +167,8 @@ def write_summary(trial: Trial | Path, out: Path, name: str = "progress.csv") ->
     rows = read_trial(trial).rows
     curve = [_column(rows, names) for names in (RETURN_COLUMNS, LIFETIME_COLUMNS,
                                                 PER_ITERATION_COLUMNS)]
-    columns = list(dict.fromkeys(c for c in [*SUMMARY_COLUMNS, *curve, *STAGE_COLUMNS]
+    columns = list(dict.fromkeys(c for c in [*SUMMARY_COLUMNS, *curve, *STAGE_COLUMNS,
+                                             REWARD_COLUMN]
                                  if c and any(c in row for row in rows)))
     out.mkdir(parents=True, exist_ok=True)
     partial = out / f".{name}.tmp"
@@ -226,15 +246,16 @@ def training_curve(trial: Trial | Path, window: int = WINDOW) -> TrainingCurve:
         raise ValueError(f"{trial.path}: needs a return column (one of {list(RETURN_COLUMNS)})")
     means = _values(rows, returns_col)
     counts = _episode_counts(trial)
-    stages = [_stage_of(row) for row in rows]
     known = np.isfinite(means)
     episodes = np.cumsum(counts)[known]
     means, counts = means[known], counts[known].astype(np.int64)
-    stages = [s for s, k in zip(stages, known, strict=True) if k]
+    kept = [row for row, k in zip(rows, known, strict=True) if k]
+    stages = [_stage_of(row) for row in kept]
     curve = np.full(len(means), np.nan)
     for start, end, _ in phases(stages):
         curve[start:end] = rolling_mean(means[start:end], counts[start:end], window)
-    return TrainingCurve(trial.name, episodes, curve, stages)
+    return TrainingCurve(trial.name, episodes, curve, stages,
+                         [str(row.get(REWARD_COLUMN) or "") for row in kept])
 
 
 @dataclass

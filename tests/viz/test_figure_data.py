@@ -8,11 +8,18 @@ import re
 import numpy as np
 import pytest
 
-from rllib_pommer.viz.behaviour import heatmaps_by_opponent, to_top_left
+from rllib_pommer.viz.behaviour import Heatmaps, heatmaps_by_opponent, to_top_left
+from rllib_pommer.viz.figures import FIG5_MARKS, plot_behaviour, plot_training
 from rllib_pommer.viz.matches import Match, load_outcomes, match_of
 from rllib_pommer.viz.paper import PAPER_OPPONENTS, PAPER_TABLES, paper_table
 from rllib_pommer.viz.tables import training_table
-from rllib_pommer.viz.training import rolling_mean, stage_figures, training_curve, write_summary
+from rllib_pommer.viz.training import (
+    TrainingCurve,
+    rolling_mean,
+    stage_figures,
+    training_curve,
+    write_summary,
+)
 
 from ..conftest import PAPER_TABLES as PAPER_TEX
 
@@ -79,8 +86,14 @@ def test_heatmaps_mirror_every_seat_to_the_top_left():
     older = {"position": [8, 1], "bomber_id": 1, "life": 8}
     enemy = {"position": [1, 2], "bomber_id": 0, "life": 9}
     record = {"initial_state": state([]), "steps": [{"state": state([laid, older, enemy])}],
-              "seats_a": [1, 3], "vs": "static"}
-    maps = heatmaps_by_opponent([record] * 3, games_per_opponent=2)["static"]
+              "seats_a": [1, 3], "vs": "static", "team": "ppo", "filters": ["jitter"]}
+    older_replay = {key: value for key, value in record.items()
+                    if key not in ("seats_a", "vs", "team", "filters")}
+    older_replay.update(game=1, agent_mix="static ppo static ppo")
+    by_match = heatmaps_by_opponent([record] * 3 + [older_replay], games_per_opponent=2)
+    assert list(by_match) == [("ppo+jitter", "static"), ("ppo", "static")]  # named policies
+    assert by_match["ppo", "static"].positions[1, 1] == 2  # seats {1, 3} from the game number
+    maps = by_match["ppo+jitter", "static"]
     assert maps.games == 2
     assert maps.positions[1, 1] == 2 * 2  # agent 1 in both states of both games; agent 3 dead
     assert maps.bombs.sum() == 2 and maps.bombs[1, 2] == 2
@@ -207,3 +220,52 @@ def test_versions_of_our_teams_meet_the_paper_table_of_their_family():
     assert paper_table("imitation_v1") is paper_table("imitation") is PAPER_TABLES["imitation"]
     assert paper_table("ppo_v2") is PAPER_TABLES["ppo"]
     assert paper_table("ppo_cautious") is None and paper_table("simple") is None
+
+
+def test_each_rows_reward_kind_comes_from_the_log_or_else_the_trials_params(tmp_path):
+    def row(iteration, **curriculum):
+        return {"training_iteration": iteration, "curriculum": curriculum,
+                "env_runners": {"num_episodes_lifetime": 10 * iteration,
+                                "episode_return_mean": 0.0}}
+
+    old, new = tmp_path / "PPO_old", tmp_path / "PPO_new"
+    for trial, rows in ((old, [row(1), row(2)]),
+                        (new, [row(1, iteration_reward="shaped"), row(2, iteration_reward="raw")])):
+        trial.mkdir()
+        (trial / "result.json").write_text("".join(json.dumps(r) + "\n" for r in rows))
+    assert training_curve(old).rewards == ["", ""]  # not logged, no params.json: unknown
+    (old / "params.json").write_text(json.dumps({"env_config": {"reward": "raw"}}))
+    (new / "params.json").write_text(json.dumps({"env_config": {"reward": "shaped"}}))
+    assert training_curve(old).rewards == ["raw", "raw"]
+    assert training_curve(new).rewards == ["shaped", "raw"]  # the log wins
+    assert training_curve(write_summary(old, tmp_path / "summary")).rewards == ["raw", "raw"]
+
+
+def test_fig3_draws_one_axis_per_reward_kind_and_says_what_its_mean_is_over(tmp_path):
+    def curve(name, rewards):
+        return TrainingCurve(name, np.arange(1, 5) * 100.0, np.linspace(-1, 0, 4),
+                             ["a", "a", "b", "b"], rewards)
+
+    fig = plot_training([curve("paper", ["shaped"] * 4), curve("no_shaping", ["raw"] * 4)],
+                        tmp_path / "fig3.png")
+    shaped, raw = fig.axes
+    assert "shaped" in shaped.get_title() and "raw" in raw.get_title()
+    assert [t.get_text() for t in shaped.get_legend().get_texts()] == ["paper"]
+    assert [t.get_text() for t in raw.get_legend().get_texts()] == ["no_shaping"]
+    assert "1,000-episode" in shaped.get_ylabel() and "100-episode means" in shaped.get_ylabel()
+    # A run whose reward kind changes between phases is drawn on both axes.
+    fig = plot_training([curve("mixed", ["shaped", "shaped", "raw", "raw"])],
+                        tmp_path / "fig3.png")
+    assert [len(ax.get_lines()) for ax in fig.axes] == [1 + 1, 1 + 1]  # segment + phase line
+    with pytest.raises(ValueError, match="unknown reward kind"):
+        plot_training([curve("x", ["dense"] * 4)], tmp_path / "fig3.png")
+
+
+def test_fig5_names_its_policies_and_explains_its_marks(tmp_path):
+    maps = {("ppo+jitter", "static"): Heatmaps(games=1), ("imitation", "simple"): Heatmaps(games=1)}
+    maps["ppo+jitter", "static"].positions[1, 1] = 3
+    fig = plot_behaviour(maps, tmp_path / "fig5.png")
+    assert fig.get_suptitle() == "Fig. 5: positions and bomb placements of ppo+jitter, imitation"
+    titles = [ax.get_title() for ax in fig.axes if ax.get_title()]
+    assert titles[0].startswith("ppo+jitter vs StaticAgent: positions")
+    assert fig.get_supxlabel() == FIG5_MARKS and "circle" in FIG5_MARKS

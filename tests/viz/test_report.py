@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 from PIL import Image
@@ -50,10 +51,15 @@ def test_report_from_records_trials_and_replays(tmp_path, replay_file, capsys):
     assert "wrote" in capsys.readouterr().out
     report = (out / "report.md").read_text()
     assert "### Table 3: PPO team — ours: `ppo`" in report
-    assert ("| StaticAgent (`static`) | 0.250 / 0.250 / 0.500 (n=4)<br>paper 0.179 / 0.138 / 0.681 "
-            "| —<br>paper 0.614 / 0.253 / 0.132 | 0.250 / 0.000 / 0.750 (n=4)") in report
-    assert "0.750 / 0.000 / 0.250 (n=4)<br>paper 0.904 / 0.023 / 0.073 |" in report
-    assert "| SimpleAgent (`simple`) | 0.500 / 0.500 / 0.000 (n=2) | — | — | — |" in report
+    assert ("| StaticAgent (`static`) | 0.250 / 0.250 / 0.500 (n=4)<br>[0.046, 0.699] / "
+            "[0.046, 0.699] / [0.150, 0.850]<br>paper 0.179 / 0.138 / 0.681 "
+            "| —<br>paper 0.614 / 0.253 / 0.132 | 0.250 / 0.000 / 0.750 (n=4)<br>[0.046, 0.699] "
+            "/ [0.000, 0.490] / [0.301, 0.954]") in report  # Wilson's, clamped to [0, 1]
+    assert "0.750 / 0.000 / 0.250 (n=4)<br>[0.301, 0.954]" in report
+    assert "[0.046, 0.699]<br>paper 0.904 / 0.023 / 0.073 |" in report
+    assert ("| SimpleAgent (`simple`) | 0.500 / 0.500 / 0.000 (n=2)<br>[0.095, 0.905] / "
+            "[0.095, 0.905] / [0.000, 0.658] | — | — | — |") in report
+    assert "blue circle marks that start cell" in report  # Fig. 5's marks explained
     for picture in ("fig3_training.png", "fig4_filters_ppo.png", "fig5_behaviour.png",
                     "game.png"):
         assert f"]({picture})" in report
@@ -76,3 +82,24 @@ def test_report_says_which_inputs_it_could_not_read(tmp_path, capsys):
     write_rows(tmp_path / "games.jsonl", ["win"])
     assert main([str(tmp_path / "games.jsonl"), "--out", str(tmp_path / "out")]) == 2
     assert "cannot tell which match" in capsys.readouterr().err
+
+
+def test_report_reads_evaluate_records_alone(tmp_path, capsys):
+    """`evaluate --records` rows name their match: no sidecar, any file name, .jsonl or .csv."""
+    from rllib_pommer.evaluate import main as evaluate
+
+    games = {"games.jsonl": ["--team", "static", "--vs", "simple"],
+             "more.csv": ["--team", "static_action", "--vs", "simple", "--filters", "jitter"]}
+    for name, match in games.items():
+        assert evaluate([*match, "--games", "2", "--workers", "1",
+                         "--records", str(tmp_path / name)]) == 0
+    out = tmp_path / "report"
+    assert main([str(tmp_path / name) for name in games] + ["--out", str(out)]) == 0
+    report = (out / "report.md").read_text()
+    assert "### Team `static` (not in the paper)" in report
+    row = next(line for line in report.splitlines() if line.startswith("| SimpleAgent"))
+    vanilla, jitter, action, jitter_action = row.split(" | ")[1:5]
+    assert "(n=2)<br>[" in vanilla and "(n=2)<br>[" in jitter_action  # rates, then intervals
+    assert jitter == action == "—"
+    for low, high in re.findall(r"\[(\d\.\d+), (\d\.\d+)\]", row):
+        assert 0.0 <= float(low) <= float(high) <= 1.0
