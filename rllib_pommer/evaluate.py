@@ -18,7 +18,6 @@ from __future__ import annotations
 import argparse
 import csv
 import json
-import os
 import sys
 import time
 from pathlib import Path
@@ -28,6 +27,7 @@ from tqdm import tqdm
 from .agents.registry import FILTERS
 from .arena import MatchSpec, play_match, record_games, record_rows, summarise
 from .game.records import write_games
+from .outputs import check_output
 
 
 def _filters(text: str) -> tuple[str, ...]:
@@ -73,19 +73,6 @@ def format_summary(spec: MatchSpec, summary: dict) -> str:
         f"agents lost to their own bombs {summary['own_bomb_deaths_a']}; "
         f"bombs per agent {summary['bombs_per_agent_a']:.2f} vs {summary['bombs_per_agent_b']:.2f}",
     ])
-
-
-def check_output(path: Path | None, flag: str) -> None:
-    """Refuse, before any game is played, an output file that could not be written."""
-    if path is None:
-        return
-    if path.is_dir():
-        raise ValueError(f"{flag} {path} is a directory, not a file")
-    folder = path.parent if str(path.parent) else Path(".")
-    if not folder.is_dir():
-        raise ValueError(f"{flag} {path}: folder {folder} does not exist")
-    if not os.access(folder, os.W_OK) or (path.exists() and not os.access(path, os.W_OK)):
-        raise ValueError(f"{flag} {path}: not writable")
 
 
 def main(argv: list[str] | None = None) -> int:

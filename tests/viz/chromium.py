@@ -22,6 +22,10 @@ FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
          "--disable-default-apps", "--mute-audio", "--remote-debugging-pipe")
 
 
+# Windows virtual key codes of the arrows and space (letters use their upper-case code).
+KEY_CODES = {"ArrowLeft": 37, "ArrowUp": 38, "ArrowRight": 39, "ArrowDown": 40, " ": 32}
+
+
 def find_chromium() -> str | None:
     return next((path for name in EXECUTABLES if (path := shutil.which(name))), None)
 
@@ -93,7 +97,7 @@ class Browser:
         """A new tab showing `url`, with its network requests recorded in `events`."""
         target = self.send("Target.createTarget", {"url": "about:blank"})["targetId"]
         session = self.send("Target.attachToTarget", {"targetId": target, "flatten": True})
-        page = Page(self, session["sessionId"])
+        page = Page(self, session["sessionId"], target)
         page.send("Network.enable")
         page.send("Page.navigate", {"url": url})
         return page
@@ -118,9 +122,10 @@ class Browser:
 
 
 class Page:
-    def __init__(self, browser: Browser, session: str):
+    def __init__(self, browser: Browser, session: str, target: str):
         self.browser = browser
         self.session = session
+        self.target = target
 
     def send(self, method: str, params: dict | None = None) -> dict:
         return self.browser.send(method, params, self.session)
@@ -132,6 +137,20 @@ class Page:
         if "exceptionDetails" in reply:
             raise RuntimeError(f"{expression}: {reply['exceptionDetails']}")
         return reply["result"].get("value")
+
+    def press(self, key: str) -> None:
+        """One key press (down and up) as a person's keyboard sends it: `key` is a DOM key value
+        ("ArrowUp", " ", "x")."""
+        code = KEY_CODES.get(key, ord(key.upper()) if len(key) == 1 else 0)
+        typed = {"text": key} if len(key) == 1 else {}
+        for kind in ("keyDown", "keyUp"):
+            self.send("Input.dispatchKeyEvent", {"type": kind, "key": key,
+                                                 "windowsVirtualKeyCode": code,
+                                                 **(typed if kind == "keyDown" else {})})
+
+    def close(self) -> None:
+        """Close the tab, as a person would."""
+        self.browser.send("Target.closeTarget", {"targetId": self.target})
 
     def wait_for(self, expression: str, timeout: float = 10) -> None:
         deadline = time.monotonic() + timeout

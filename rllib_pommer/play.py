@@ -1,0 +1,88 @@
+"""`python -m rllib_pommer.play --team A --vs B`: play a seat of a Team game in the browser.
+
+You sit on `--seat` (default 0) of team A; the other seat of your team plays `--teammate`
+(default: policy A), both seats of the other team play policy B. Any policy name the arena takes
+works (scripted, learned, a PPO run, an `http` remote agent). The command serves one game on
+loopback (unless `--host` says otherwise) and prints its URL first; open it in a browser. Arrow
+keys move, space lays a bomb, any other key plays Stop, and so does no key within the turn time
+(`--turn-time SECONDS`, or `wait` to wait for you; also set on the page, with pause).
+
+The game ends with its result, or as a forfeit when the page is closed (or the command is
+stopped); either way it is saved as a replay (`--out`, default play-<time>.jsonl.gz) for
+`python -m rllib_pommer.replay html|render|verify`, and the command exits. Only one page can hold
+the game: a second one is refused.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import sys
+import time
+from pathlib import Path
+
+from .outputs import check_output
+from .playing.server import make_app, parse_turn_time, serve_game
+from .playing.session import HumanGame, PlaySpec
+
+DEFAULT_TURN_TIME = 0.5
+
+
+def _turn_time(text: str) -> float | None:
+    try:
+        value = float(text)
+    except ValueError:
+        value = text  # "wait", or named as it is in the error
+    try:
+        return parse_turn_time(value)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m rllib_pommer.play", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--team", required=True, help="policy of your team (your teammate)")
+    parser.add_argument("--vs", required=True, help="policy of the other team")
+    parser.add_argument("--seat", type=int, default=0, help="your seat, 0..3 (default 0)")
+    parser.add_argument("--teammate", help="policy of your teammate (default: --team)")
+    parser.add_argument("--seed", type=int, default=0, help="deals the board and the agents' "
+                        "random streams, as game 0 of `evaluate --seed`")
+    parser.add_argument("--host", default="127.0.0.1", help="address to bind (default: loopback)")
+    parser.add_argument("--port", type=int, default=8080, help="0: any free port")
+    parser.add_argument("--turn-time", type=_turn_time, default=DEFAULT_TURN_TIME,
+                        metavar="SECONDS|wait", help="time for each move (default %(default)s)")
+    parser.add_argument("--out", type=Path, help="the replay, .jsonl or .jsonl.gz "
+                        "(default: play-<date>-<time>.jsonl.gz here)")
+    args = parser.parse_args(argv)
+    out = args.out or Path(time.strftime("play-%Y%m%d-%H%M%S.jsonl.gz"))
+    try:
+        if not 0 <= args.port < 65536:
+            raise ValueError(f"--port must be in 0..65535, got {args.port}")
+        check_output(out, "--out")
+        game = HumanGame(PlaySpec(args.team, args.vs, args.seat, args.teammate, args.seed))
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+
+    def announce(port: int) -> None:
+        print(f"play at http://{args.host}:{port}/", flush=True)
+
+    try:
+        table = asyncio.run(serve_game(make_app(game, out, args.turn_time), args.host, args.port,
+                                       announce))
+    except OSError as exc:
+        print(f"error: cannot serve on {args.host}:{args.port} ({exc})", file=sys.stderr)
+        return 2
+    forfeit = f" ({game.forfeit['reason']})" if game.forfeit else ""
+    print(f"{game.result()}{forfeit} after {game.step} steps; {game.info['result_name']}"
+          + (f", winners {game.info['winners']}" if game.info.get("winners") else ""))
+    if table.save_error:
+        print(f"error: {table.save_error}", file=sys.stderr)
+        return 1
+    print(f"replay saved to {out}: python -m rllib_pommer.replay html {out} --out game.html")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

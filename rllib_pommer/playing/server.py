@@ -1,0 +1,362 @@
+"""The web side of a played game: the page, its moves, the turn clock, one page per game.
+
+    GET  /          the page (409 while another page holds the seat, or once the game is over)
+    GET  /seat      WebSocket: the page holding it holds the seat. The server sends
+                    {"type": "seated", "token": ...} and then every step's view; the page sends
+                    nothing. Closing it before the end (the tab closed) forfeits the game.
+                    A second page gets {"type": "refused", "error": ...} and is closed.
+    POST /move      {"action": 0..5 or "stop|up|down|left|right|bomb", "step": T}, with the
+                    seat's token in the X-Seat-Token header: the person's action for step T
+    POST /settings  {"turn_time": seconds or "wait", "paused": true|false} (either key), token too
+    GET  /state     the game so far, as JSON (step, every step's actions, result, settings)
+
+Malformed moves and settings get 400 naming the field and value, a request without the seat's
+token 403, a move that cannot be played now 409 (another step, paused, a dead agent, the game
+over); none of them touches the game. The clock plays a step as soon as the person moves, or with
+Stop when the turn time runs out ("wait": never); it starts when a page takes the seat and stops
+while paused. Once the person's agent is dead the others play on at the turn time (`WATCH_STEP`
+under "wait"). When the game ends, by a result or a forfeit, the replay is written and `done` set.
+Agents act in a worker thread, so a slow remote agent never stalls the page's requests.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import math
+import secrets
+import signal
+from collections.abc import Awaitable, Callable
+from pathlib import Path
+from typing import Any
+
+from aiohttp import WSCloseCode, web
+
+from ..game.constants import NUM_ACTIONS, Action
+from ..game.records import write_games
+from ..serving.protocol import BadRequest, parse_body
+from ..viz.page import board_assets, page_html
+from .session import HUMAN, HumanGame
+
+WAIT = "wait"
+TURN_TIME_RANGE = (0.05, 60.0)  # seconds
+WATCH_STEP = 0.2  # seconds per step once the person is dead and the turn time is "wait"
+HEARTBEAT = 10.0  # seconds: a page gone without closing its socket is noticed within this
+MAX_BODY_BYTES = 4 * 1024  # a move is a few dozen bytes
+TOKEN_HEADER = "X-Seat-Token"
+MOVE_NAMES = {action.name.lower(): int(action) for action in Action}
+
+Handler = Callable[[web.Request], Awaitable[web.StreamResponse]]
+
+
+class Refused(Exception):
+    """A request the game cannot take: answered with `status` and `{"error": message}`."""
+
+    def __init__(self, status: int, message: str):
+        super().__init__(message)
+        self.status = status
+
+
+def _fields(body: dict, allowed: tuple[str, ...], what: str) -> None:
+    unknown = sorted(set(body) - set(allowed))
+    if unknown:
+        raise BadRequest(f"{what}: unknown field {unknown[0]!r}; valid: {list(allowed)}")
+
+
+def parse_move(body: Any) -> tuple[int, int]:
+    """(action, step) of a move body, or BadRequest naming what is wrong."""
+    _fields(body, ("action", "step"), "move")
+    for key in ("action", "step"):
+        if key not in body:
+            raise BadRequest(f'move: missing field {key!r}, e.g. {{"action": "up", "step": 3}}')
+    action, step = body["action"], body["step"]
+    if isinstance(action, str) and action.lower() in MOVE_NAMES:
+        action = MOVE_NAMES[action.lower()]
+    elif isinstance(action, bool) or not isinstance(action, int) or action not in range(
+            NUM_ACTIONS):
+        raise BadRequest(f"move: action {json.dumps(action):.60} is not one of "
+                         f"0..{NUM_ACTIONS - 1} or {'/'.join(MOVE_NAMES)}")
+    if isinstance(step, bool) or not isinstance(step, int) or step < 0:
+        raise BadRequest(f"move: step {json.dumps(step):.60} is not a step number (0, 1, ...)")
+    return action, step
+
+
+def parse_turn_time(value: Any) -> float | None:
+    """Seconds per turn, or None for "wait" (the clock waits for the person)."""
+    if value == WAIT:
+        return None
+    lo, hi = TURN_TIME_RANGE
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(
+            value) or not lo <= value <= hi:
+        raise ValueError(f"turn time {json.dumps(value):.60} is neither a number of seconds in "
+                         f"{lo}..{hi} nor {WAIT!r}")
+    return float(value)
+
+
+def parse_settings(body: Any) -> dict:
+    """The settings a body changes: `turn_time` (seconds or None) and/or `paused`."""
+    _fields(body, ("turn_time", "paused"), "settings")
+    changes: dict = {}
+    if "turn_time" in body:
+        try:
+            changes["turn_time"] = parse_turn_time(body["turn_time"])
+        except ValueError as exc:
+            raise BadRequest(f"settings: {exc}") from None
+    if "paused" in body:
+        if not isinstance(body["paused"], bool):
+            raise BadRequest(f"settings: paused must be true or false, got "
+                             f"{json.dumps(body['paused']):.60}")
+        changes["paused"] = body["paused"]
+    return changes
+
+
+class Table:
+    """A game being played: the game itself, the page holding the seat, the clock's settings.
+
+    Only the clock (`run`) changes the game; request handlers leave a move or a change of
+    settings and wake it."""
+
+    def __init__(self, game: HumanGame, out: Path, turn_time: float | None):
+        self.game = game
+        self.out = out
+        self.turn_time = turn_time
+        self.paused = False
+        self.page: web.WebSocketResponse | None = None
+        self.token: str | None = None
+        self.move: int | None = None  # the person's action for the current step, once sent
+        self.busy = False  # a step is being played
+        self.left: str | None = None  # why the page left, if it did
+        self.wake = asyncio.Event()
+        self.seated = asyncio.Event()
+        self.done = asyncio.Event()
+        self.saved: Path | None = None
+        self.save_error: str | None = None
+
+    def settings(self) -> dict:
+        return {"turnTime": self.turn_time, "paused": self.paused}
+
+    def refusal(self) -> str | None:
+        """Why a new page cannot take the seat, if it cannot."""
+        if self.game.over or self.left:
+            return "this game is over; start the command again for a new one"
+        if self.page is not None:
+            return "this game is already being played in another page"
+        return None
+
+    def check_token(self, request: web.Request) -> None:
+        token = request.headers.get(TOKEN_HEADER)
+        if self.token is None or token is None or not secrets.compare_digest(token, self.token):
+            raise Refused(403, f"this page does not hold the seat (missing or wrong "
+                               f"{TOKEN_HEADER} header)")
+
+    def take_move(self, action: int, step: int) -> None:
+        game = self.game
+        if game.over:
+            raise Refused(409, f"the game is over (step {game.step}); no more moves")
+        if self.paused:
+            raise Refused(409, "the game is paused; resume it to move")
+        if not game.human_alive:
+            raise Refused(409, f"your agent (agent {game.spec.seat}) is dead; the others play on")
+        if self.busy or step != game.step:
+            raise Refused(409, f"move for step {step}, but the game is at step {game.step}"
+                               + (" (being played)" if self.busy else ""))
+        if self.move is not None:
+            raise Refused(409, f"step {step} already has your move "
+                               f"({Action(self.move).name.lower()})")
+        self.move = action
+        self.wake.set()
+
+    def change(self, changes: dict) -> None:
+        """New settings; a new turn time or a resume restarts the current turn's clock."""
+        self.turn_time = changes.get("turn_time", self.turn_time)
+        self.paused = changes.get("paused", self.paused)
+        self.wake.set()
+
+    def turn_timeout(self) -> float | None:
+        """Seconds the clock waits for the current step; None: until woken."""
+        if self.paused:
+            return None
+        if not self.game.human_alive:
+            return self.turn_time or WATCH_STEP
+        return self.turn_time
+
+    async def send(self, message: dict) -> None:
+        if self.page is not None and not self.page.closed:
+            # A page going away is noticed by its handler, which ends the game.
+            with contextlib.suppress(ConnectionError, RuntimeError):
+                await self.page.send_json(message)
+
+    async def run(self) -> None:
+        """The clock: one step per move or per turn time, until the game ends; then the
+        replay is saved and the page told."""
+        await self.seated.wait()
+        while True:
+            if self.left:
+                self.game.leave(self.left)
+            if self.game.over:
+                break
+            if self.move is None or self.paused:
+                try:
+                    await asyncio.wait_for(self.wake.wait(), self.turn_timeout())
+                    woken = True
+                except asyncio.TimeoutError:
+                    woken = False
+                self.wake.clear()
+                if self.left or self.paused or (woken and self.move is None):
+                    continue  # left, paused, or the settings changed: a fresh turn
+            action = int(Action.STOP) if self.move is None else self.move
+            self.busy = True
+            try:
+                await asyncio.to_thread(self.game.advance, action)
+            finally:
+                self.busy, self.move = False, None
+            await self.send({"type": "frame", **self.game.view(), **self.settings()})
+        await self._finish()
+
+    async def _finish(self) -> None:
+        try:
+            await asyncio.to_thread(write_games, self.out, [self.game.record()])
+            self.saved = self.out
+        except OSError as exc:
+            self.save_error = f"could not write the replay to {self.out}: {exc}"
+        await self.send({"type": "over", **self.game.view(), **self.settings(),
+                          "replay": str(self.saved) if self.saved else None,
+                          "error": self.save_error})
+        if self.page is not None:
+            await self.page.close()
+        self.done.set()
+
+    def state(self) -> dict:
+        record = self.game.recorder.record
+        return {"seat": self.game.spec.seat, "players": self.game.players,
+                "step": self.game.step, "actions": [s["actions"] for s in record["steps"]],
+                "over": self.game.over, "result": self.game.result(),
+                "forfeit": self.game.forfeit, **self.settings(),
+                "replay": str(self.saved) if self.saved else None}
+
+
+TABLE = web.AppKey("table", Table)
+
+
+@web.middleware
+async def _refusals_as_json(request: web.Request, handler: Handler) -> web.StreamResponse:
+    try:
+        return await handler(request)
+    except BadRequest as exc:
+        return web.json_response({"error": str(exc)}, status=400)
+    except Refused as exc:
+        return web.json_response({"error": str(exc)}, status=exc.status)
+
+
+def _page_data(table: Table) -> dict:
+    game = table.game
+    spec = game.spec
+    players = ["you" if p == HUMAN else p for p in game.players]
+    partner = players[spec.partner_seat]
+    return {
+        "title": f"You (agent {spec.seat}) and {partner} against {spec.vs} · seed {spec.seed}",
+        "board": board_assets(game.game.config.board_size),
+        "seat": spec.seat,
+        "players": players,
+        "turnTimeRange": list(TURN_TIME_RANGE),
+    }
+
+
+async def page(request: web.Request) -> web.Response:
+    table = request.app[TABLE]
+    reason = table.refusal()
+    if reason:
+        return web.Response(status=409, text=f"Refused: {reason}.\n")
+    return web.Response(text=page_html(__package__, "play.html", _page_data(table)),
+                        content_type="text/html")
+
+
+async def seat(request: web.Request) -> web.WebSocketResponse:
+    table = request.app[TABLE]
+    socket = web.WebSocketResponse(heartbeat=HEARTBEAT)
+    await socket.prepare(request)
+    reason = table.refusal()
+    if reason:
+        await socket.send_json({"type": "refused", "error": reason})
+        await socket.close(code=WSCloseCode.POLICY_VIOLATION, message=b"refused")
+        return socket
+    table.page, table.token = socket, secrets.token_urlsafe(16)
+    await socket.send_json({"type": "seated", "token": table.token, **table.game.view(),
+                            **table.settings()})
+    table.seated.set()
+    async for _ in socket:
+        pass  # the page sends nothing: what matters is that it stays
+    if not table.game.over:
+        table.left = "the page was closed"
+        table.wake.set()
+    return socket
+
+
+async def move(request: web.Request) -> web.Response:
+    table = request.app[TABLE]
+    table.check_token(request)
+    action, step = parse_move(parse_body(await request.read()))
+    table.take_move(action, step)
+    return web.json_response({"accepted": {"action": Action(action).name.lower(), "step": step}})
+
+
+async def settings(request: web.Request) -> web.Response:
+    table = request.app[TABLE]
+    table.check_token(request)
+    table.change(parse_settings(parse_body(await request.read())))
+    await table.send({"type": "settings", **table.settings()})
+    return web.json_response(table.settings())
+
+
+async def state(request: web.Request) -> web.Response:
+    return web.json_response(request.app[TABLE].state())
+
+
+async def _clock(app: web.Application):
+    """Runs the game's clock for the application's lifetime."""
+    task = asyncio.create_task(app[TABLE].run())
+    yield
+    task.cancel()
+
+
+def make_app(game: HumanGame, out: Path, turn_time: float | None) -> web.Application:
+    app = web.Application(client_max_size=MAX_BODY_BYTES, middlewares=[_refusals_as_json])
+    app[TABLE] = Table(game, out, turn_time)
+    app.cleanup_ctx.append(_clock)
+    app.router.add_get("/", page)
+    app.router.add_get("/seat", seat)
+    app.router.add_post("/move", move)
+    app.router.add_post("/settings", settings)
+    app.router.add_get("/state", state)
+    return app
+
+
+async def serve_game(app: web.Application, host: str, port: int,
+                     on_ready: Callable[[int], None]) -> Table:
+    """Serve until the game ends (or SIGINT/SIGTERM, which forfeits it); the replay is saved
+    either way. `on_ready` gets the bound port."""
+    table = app[TABLE]
+    runner = web.AppRunner(app, access_log=None)
+    await runner.setup()
+    try:
+        await web.TCPSite(runner, host, port).start()
+    except OSError:
+        await runner.cleanup()
+        raise
+    bound_port = runner.addresses[0][1]
+    loop = asyncio.get_running_loop()
+
+    def stop() -> None:
+        table.left = "the server was stopped"
+        table.seated.set()  # a game nobody took is recorded too
+        table.wake.set()
+
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        loop.add_signal_handler(signum, stop)
+    try:
+        on_ready(bound_port)
+        await table.done.wait()
+    finally:
+        await runner.cleanup()
+    return table

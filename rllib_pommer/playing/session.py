@@ -1,0 +1,155 @@
+"""One Team game with a person on one seat and named policies on the other three.
+
+The board and the agents' random streams come from `game_seeds(seed, 0)`, the arena's rule for
+game 0 of a match seeded `seed`, so the same seed deals the same board as `evaluate --seed`. The
+other seats are built by the arena's registry (`make_agent`), so any policy name works: scripted,
+learned, a PPO run, or an `http` remote agent. The game is recorded as it is played, with every
+agent's observations (the person's are what the page showed), in the schema `replay verify`,
+`render` and `html` read; a game the person leaves early is recorded up to its last step and
+marked as a forfeit.
+"""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..agents.registry import make_agent
+from ..game.constants import NUM_ACTIONS, NUM_AGENTS, TEAM, Action, Item, Result, teammate_of
+from ..game.engine import Game
+from ..game.records import GameRecorder
+from ..game.seeding import game_seeds
+from ..viz.frames import Frame
+from ..viz.page import action_labels, agent_stats, encode_frame
+
+HUMAN = "human"
+
+
+@dataclass(frozen=True)
+class PlaySpec:
+    """The person sits on `seat` of team `team`, whose other seat plays `teammate` (default: the
+    `team` policy itself); both seats of the other team play `vs`."""
+
+    team: str
+    vs: str
+    seat: int = 0
+    teammate: str | None = None
+    seed: int = 0
+
+    def __post_init__(self):
+        if isinstance(self.seat, bool) or self.seat not in range(NUM_AGENTS):
+            raise ValueError(f"seat must be one of 0..{NUM_AGENTS - 1}, got {self.seat!r}")
+
+    @property
+    def partner_seat(self) -> int:
+        return teammate_of(self.seat, TEAM.game_type) - Item.AGENT0
+
+    def players(self) -> list[str]:
+        """Who plays each seat: `HUMAN` or a policy name."""
+        return [HUMAN if s == self.seat else (self.teammate or self.team)
+                if s == self.partner_seat else self.vs for s in range(NUM_AGENTS)]
+
+
+def _one_torch_thread() -> None:
+    """A learned seat decides one observation per step, where torch's intra-op threads cannot
+    help and only spin against the server (serve.py measured 136 ms against 0.4 ms per action on
+    a loaded 2-core box). torch is only here if a learned policy was named."""
+    torch = sys.modules.get("torch")
+    if torch is not None:
+        torch.set_num_threads(1)
+
+
+class HumanGame:
+    """The game: `advance(action)` plays the person's action and the agents' on the next step."""
+
+    def __init__(self, spec: PlaySpec):
+        self.spec = spec
+        self.players = spec.players()
+        self.agents = {s: make_agent(name) for s, name in enumerate(self.players)
+                       if name != HUMAN}
+        _one_torch_thread()
+        board_seed, rngs = game_seeds(spec.seed, 0)
+        self.game = Game(TEAM)
+        self.obs = self.game.reset(board_seed)
+        for seat, agent in self.agents.items():
+            agent.reset(seat, int(TEAM.game_type), rngs[seat])
+        self.recorder = GameRecorder(self.game.batch, 0, board_seed, " ".join(self.players))
+        self.recorder.record.update(game=0, match_seed=spec.seed, human_seat=spec.seat,
+                                    players=self.players)
+        self.recorder.start()
+        self.info: dict = {"result": int(Result.INCOMPLETE), "result_name": "Incomplete"}
+        self.forfeit: dict | None = None
+
+    @property
+    def step(self) -> int:
+        return len(self.recorder.record["steps"])
+
+    @property
+    def over(self) -> bool:
+        return self.game.done or self.forfeit is not None
+
+    @property
+    def human_alive(self) -> bool:
+        return bool(self.game.batch.alive[0, self.spec.seat])
+
+    def advance(self, action: int) -> None:
+        """One step: the person plays `action` (ignored once their agent is dead), each living
+        agent acts on its own observation."""
+        if self.over:
+            raise ValueError(f"the game is over (step {self.step}); no more moves")
+        if isinstance(action, bool) or action not in range(NUM_ACTIONS):
+            raise ValueError(f"action {action!r} is not one of 0..{NUM_ACTIONS - 1}")
+        alive = self.game.batch.alive[0]
+        actions = [int(Action.STOP)] * NUM_AGENTS
+        if alive[self.spec.seat]:
+            actions[self.spec.seat] = int(action)
+        for seat, agent in self.agents.items():
+            if alive[seat]:
+                actions[seat] = int(agent.act(self.obs.select(seat)))
+        self.obs, _, _, self.info = self.game.step(actions)
+        self.recorder.step(actions)
+
+    def leave(self, reason: str) -> None:
+        """The person left before the end: the game stops here, a forfeit of their seat."""
+        if not self.over:
+            self.forfeit = {"seat": self.spec.seat, "step": self.step, "reason": reason}
+
+    def result(self) -> str:
+        """For the person's team: win, loss, tie, forfeit, or unfinished."""
+        if self.forfeit:
+            return "forfeit"
+        if not self.game.done:
+            return "unfinished"
+        winners = self.info.get("winners", [])
+        return "tie" if not winners else "win" if self.spec.seat in winners else "loss"
+
+    def _state(self) -> dict:
+        steps = self.recorder.record["steps"]
+        return steps[-1]["state"] if steps else self.recorder.record["initial_state"]
+
+    def view(self) -> dict:
+        """What the page shows now: the board through the person's fog, the agents' stats, the
+        last actions, the step and the outcome."""
+        seat, state = self.spec.seat, self._state()
+        frame = Frame(self.step, np.asarray(self.obs.board[seat]),
+                      np.asarray(self.obs.bomb_life[seat]), state["agents"], seat)
+        steps = self.recorder.record["steps"]
+        return {
+            "step": self.step,
+            "cells": encode_frame(frame),
+            "agents": agent_stats(state["agents"]),
+            "actions": action_labels(steps[-1]["actions"]) if steps else None,
+            "alive": self.human_alive,
+            "over": self.over,
+            "result": self.result(),
+            "info": self.info,
+            "forfeit": self.forfeit,
+        }
+
+    def record(self) -> dict:
+        """The game record so far (finished or not), with the person's result."""
+        record = self.recorder.finish()
+        record.update(human_result=self.result(), forfeit=self.forfeit)
+        return record
