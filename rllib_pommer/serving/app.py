@@ -3,7 +3,10 @@
 Handlers run the agent on the event loop itself: requests of one game arrive one at a time, and a
 thread hop would only add latency. Malformed requests get HTTP 400 with `{"error": message}`;
 bodies above `MAX_BODY_BYTES` get 413 from aiohttp before they are read. Any other failure is a
-500 for that request only: the server keeps running.
+500 for that request only: the server keeps running. A client gets `read_timeout` seconds to send
+a whole request (headers from the moment it connects or was last answered, then the body): a
+stalled one is cut off, with 408 if its headers had arrived. Connections and error logs are
+bounded as `limits` describes.
 """
 
 from __future__ import annotations
@@ -14,15 +17,21 @@ from collections.abc import Awaitable, Callable
 
 from aiohttp import web
 
+from .limits import MAX_CONNECTIONS, BoundedSite, connection_limit, limit_logs
 from .policy_host import PolicyHost, Seat
 from .protocol import BadRequest, parse_action, parse_body, parse_episode_end, parse_init_agent
 
 DEFAULT_PORT = 10080
 # An observation is about 12 kB as the runner encodes it; anything far larger is not one.
 MAX_BODY_BYTES = 64 * 1024
+# Seconds to send a request; the runner sends one within milliseconds of opening or reusing its
+# connection. A keep-alive connection idle this long is closed too (clients reconnect).
+READ_TIMEOUT_S = 10.0
 
 HOST = web.AppKey("host", PolicyHost)
 STOP = web.AppKey("stop", asyncio.Event)
+READ_TIMEOUT = web.AppKey("read_timeout", float)
+ANSWERING = web.AppKey("answering", set)  # the connections whose request is being answered
 
 Handler = Callable[[web.Request], Awaitable[web.StreamResponse]]
 SUCCESS = {"success": True}
@@ -36,8 +45,26 @@ async def _bad_requests_as_400(request: web.Request, handler: Handler) -> web.St
         return web.json_response({"error": str(exc)}, status=400)
 
 
+@web.middleware
+async def _mark_answering(request: web.Request, handler: Handler) -> web.StreamResponse:
+    """Keeps `ANSWERING` current, so the connection limit closes idle connections first."""
+    answering = request.app[ANSWERING]
+    answering.add(request.protocol)
+    try:
+        return await handler(request)
+    finally:
+        answering.discard(request.protocol)
+
+
 async def _body(request: web.Request):
-    return parse_body(await request.read())
+    seconds = request.app[READ_TIMEOUT]
+    try:
+        async with asyncio.timeout(seconds):
+            data = await request.read()
+    except TimeoutError:
+        raise web.HTTPRequestTimeout(
+            text=f"request body not received within {seconds:g} s") from None
+    return parse_body(data)
 
 
 async def ping(request: web.Request) -> web.Response:
@@ -69,10 +96,13 @@ async def shutdown(request: web.Request) -> web.Response:
     return web.json_response(SUCCESS)
 
 
-def make_app(host: PolicyHost) -> web.Application:
-    app = web.Application(client_max_size=MAX_BODY_BYTES, middlewares=[_bad_requests_as_400])
+def make_app(host: PolicyHost, read_timeout: float = READ_TIMEOUT_S) -> web.Application:
+    app = web.Application(client_max_size=MAX_BODY_BYTES,
+                          middlewares=[_mark_answering, _bad_requests_as_400])
     app[HOST] = host
     app[STOP] = asyncio.Event()
+    app[READ_TIMEOUT] = read_timeout
+    app[ANSWERING] = set()
     app.router.add_get("/ping", ping)
     app.router.add_post("/init_agent", init_agent)
     app.router.add_post("/action", action)
@@ -81,12 +111,20 @@ def make_app(host: PolicyHost) -> web.Application:
     return app
 
 
-async def start(app: web.Application, host: str, port: int) -> tuple[web.AppRunner, int]:
-    """Start serving `app` (port 0: any free port); returns the runner and the bound port."""
-    runner = web.AppRunner(app, access_log=None)
+async def start(app: web.Application, host: str, port: int,
+                max_connections: int = MAX_CONNECTIONS) -> tuple[web.AppRunner, int]:
+    """Start serving `app` (port 0: any free port) to at most `max_connections` clients at once
+    (fewer if `limits.connection_limit` says so); returns the runner and the bound port."""
+    limit_logs()
+    # aiohttp closes a connection that has not sent a whole request `keepalive_timeout` seconds
+    # after it opened or was last answered.
+    runner = web.AppRunner(app, access_log=None,
+                           keepalive_timeout=app.get(READ_TIMEOUT, READ_TIMEOUT_S))
     await runner.setup()
+    site = BoundedSite(runner, host, port, connection_limit(max_connections),
+                       answering=app.get(ANSWERING, set()).__contains__)
     try:
-        await web.TCPSite(runner, host, port).start()
+        await site.start()
     except OSError:
         await runner.cleanup()
         raise

@@ -22,10 +22,11 @@ from rllib_pommer.serving.policy_host import PolicyHost
 
 
 @contextmanager
-def running(app: web.Application) -> Iterator[int]:
-    """Serve `app` on 127.0.0.1 until the block ends; yields the port."""
+def running(app: web.Application, **start_options) -> Iterator[int]:
+    """Serve `app` on 127.0.0.1 until the block ends (`start_options` go to `start`); yields
+    the port."""
     loop = asyncio.new_event_loop()
-    runner, port = loop.run_until_complete(start(app, "127.0.0.1", 0))
+    runner, port = loop.run_until_complete(start(app, "127.0.0.1", 0, **start_options))
     thread = threading.Thread(target=loop.run_forever, daemon=True)
     thread.start()
     try:
