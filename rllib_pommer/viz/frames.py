@@ -50,6 +50,12 @@ def _bomb_life(state: dict) -> np.ndarray:
     return life
 
 
+def state_frame(state: dict) -> Frame:
+    """The whole board of one state (the reference schema, e.g. `Game.dump()` of a live game)."""
+    return Frame(state["step_count"], np.asarray(state["board"]), _bomb_life(state),
+                 state["agents"])
+
+
 def _recorded_views(record: dict, viewer: int) -> list[tuple[np.ndarray, np.ndarray]] | None:
     if not record.get("has_observations") or "initial_observations" not in record:
         return None
@@ -71,10 +77,9 @@ def frames(record: dict, viewer: int | None = None) -> list[Frame]:
     """Every frame of a game record, in full or through the fog of agent `viewer`."""
     states = game_states(record)
     if viewer is None:
-        views = [(np.asarray(s["board"]), _bomb_life(s)) for s in states]
-    elif 0 <= viewer < NUM_AGENTS:
-        views = _recorded_views(record, viewer) or _derived_views(record, viewer)
-    else:
+        return [state_frame(s) for s in states]
+    if not 0 <= viewer < NUM_AGENTS:
         raise ValueError(f"fog: agent {viewer} is not one of 0..{NUM_AGENTS - 1}")
+    views = _recorded_views(record, viewer) or _derived_views(record, viewer)
     return [Frame(s["step_count"], board, life, s["agents"], viewer)
             for s, (board, life) in zip(states, views, strict=True)]

@@ -1,9 +1,9 @@
-"""The env's API (RLlib's multi-agent check, PettingZoo's tests), seeding, deaths and rewards."""
+"""The env's API (RLlib's multi-agent check), seeding, deaths and rewards; the PettingZoo env
+plays the same episodes (PettingZoo's own tests: tests/test_envs.py)."""
 
 from __future__ import annotations
 
 import numpy as np
-from pettingzoo.test import parallel_api_test, parallel_seed_test
 from ray.rllib.utils.pre_checks.env import check_multiagent_environments
 
 from rllib_pommer.rl.env import PommeEnv, pack_raw, unpack_raw
@@ -27,9 +27,20 @@ def test_rllib_multi_agent_check():
     check_multiagent_environments(PommeEnv({"seed": 0}))
 
 
-def test_pettingzoo_api_and_seed():
-    parallel_api_test(PommeParallelEnv({"max_steps": 200}), num_cycles=300)
-    parallel_seed_test(lambda: PommeParallelEnv({"max_steps": 200}), num_cycles=300)
+def test_pettingzoo_env_plays_the_rllib_envs_episodes():
+    """One game definition (envs.team): same seed and actions, same planes and rewards; the
+    PettingZoo env still answers at its old import path."""
+    rllib_env, pz_env = PommeEnv({"max_steps": 300}), PommeParallelEnv({"max_steps": 300})
+    (obs, _), (pz_obs, _) = rllib_env.reset(seed=5), pz_env.reset(seed=5)
+    rng, done = np.random.default_rng(5), False
+    while not done:
+        assert all(np.array_equal(obs[a]["planes"], pz_obs[f"player_{a}"]) for a in obs)
+        actions = {a: int(rng.integers(6)) for a in rllib_env.agents}
+        obs, rewards, terminateds, _, _ = rllib_env.step(actions)
+        pz_obs, pz_rewards, *_ = pz_env.step({f"player_{a}": x for a, x in actions.items()})
+        assert pz_rewards == {f"player_{a}": r for a, r in rewards.items()}
+        done = terminateds["__all__"]
+    assert pz_env.agents == []
 
 
 def test_same_seed_same_episode():

@@ -1,0 +1,79 @@
+"""The four-agent Team game as a PettingZoo `ParallelEnv`, for tools that speak PettingZoo.
+
+Same game, observations, rewards and seeding as the RLlib env (both are `team.MultiAgentTeam`);
+agents are named "player_0".."player_3" (PettingZoo convention), and an agent that dies leaves
+`agents` after its last step, as in PettingZoo's parallel API. Observations default to the 19
+planes as a Box (config `observation` picks another form, `team.OBSERVATIONS`).
+"""
+
+from __future__ import annotations
+
+from copy import deepcopy
+
+import gymnasium as gym
+from pettingzoo import ParallelEnv
+
+from .team import ACTION_SPACE, RENDER_MODES, MultiAgentTeam, check_render_mode
+
+
+def _name(agent: int) -> str:
+    return f"player_{agent}"
+
+
+class PommeParallelEnv(ParallelEnv):
+    """The Team game as a PettingZoo `ParallelEnv` (agents "player_0".."player_3").
+
+    config: as `team.MultiAgentTeam`'s, with observation "planes" by default; render_mode None or
+    "rgb_array" (the whole board, drawn by the replay renderer).
+    """
+
+    metadata = {"name": "pommerman_team_v0", "render_modes": RENDER_MODES, "render_fps": 8}
+
+    def __init__(self, config: dict | None = None, render_mode: str | None = None):
+        self.render_mode = check_render_mode(render_mode)
+        self.env = MultiAgentTeam({"observation": "planes", **(config or {})})
+        self.possible_agents = [_name(a) for a in self.env.possible_agents]
+        self._ids = {_name(a): a for a in self.env.possible_agents}
+        self.agents = []
+        # Own space objects per agent, so seeding one agent's space never moves another's.
+        self._observation_spaces = {n: deepcopy(self.env.observation_spaces[self._ids[n]])
+                                    for n in self.possible_agents}
+        self._action_spaces = {n: deepcopy(ACTION_SPACE) for n in self.possible_agents}
+
+    def observation_space(self, agent):
+        return self._observation_spaces[agent]
+
+    def action_space(self, agent):
+        return self._action_spaces[agent]
+
+    def reset(self, seed=None, options=None):
+        obs, infos = self.env.reset(seed=seed, options=options)
+        self.agents = [_name(a) for a in self.env.agents]
+        return self._named(obs), self._named(infos)
+
+    def step(self, actions):
+        obs, rewards, terminateds, truncateds, infos = self.env.step(
+            {self._ids[name]: action for name, action in actions.items()})
+        acted = [self._ids[name] for name in self.agents]
+        self.agents = [_name(a) for a in self.env.agents]
+        return (self._named(obs), self._named(rewards), self._named(terminateds),
+                {_name(a): False for a in acted}, self._named(infos))
+
+    @staticmethod
+    def _named(per_agent: dict) -> dict:
+        return {_name(a): value for a, value in per_agent.items() if a != "__all__"}
+
+    def render(self):
+        if self.render_mode is None:
+            gym.logger.warn("render() without a render_mode: pass render_mode='rgb_array'")
+            return None
+        return self.env.draw()
+
+    def close(self):
+        pass
+
+
+def parallel_env(render_mode: str | None = None, **config) -> PommeParallelEnv:
+    """The PettingZoo env; keyword arguments are its config (seed, max_steps, reward,
+    observation)."""
+    return PommeParallelEnv(config, render_mode)

@@ -1,0 +1,183 @@
+"""The four-agent Team game as an environment: the one definition every face of it shares.
+
+`MultiAgentTeam` speaks RLlib's multi-agent protocol (dicts keyed by seat 0..3, `"__all__"` in
+terminateds and truncateds) without inheriting from Ray, so the RLlib env (`rl/env.py`), the
+PettingZoo env and the single-agent Gymnasium env (this package) play the same episodes with the
+same observations and rewards, and only the RLlib one pays for importing Ray.
+
+An agent that dies gets its last observation and its final reward, then leaves; the game ends for
+everyone when the engine says so (a team wiped out, or the step limit, a tie). Rewards are zero
+until an agent's last step, where `reward_mode` decides them:
+
+* "shaped" (the paper): +1 if the agent's team won, else +0.5 if exactly one enemy is dead, else -1,
+  judged at the agent's last step;
+* "raw": the engine's reward (+1 win, -1 loss or tie) for agents present at the end, -1 for an
+  agent that died before (it cannot see the outcome any more).
+
+The final infos carry `winners` (seats, empty on a tie), so callbacks can log the true outcome
+whatever the reward mode. Each reset also draws, from the env's seeded stream, whether the learner's
+action filter and jitter correction are on for the episode (`filters` in every info), so the
+episode's filters replay with its seed. `set_stage` changes reward mode and filter probabilities.
+
+What an agent observes is the config's `observation` form (`OBSERVATIONS`): "dict", the default
+the training uses, holds "planes" (the paper's 19 float planes the networks read) and "raw" (the
+`Observation` packed into one int16 vector, from which scripted modules and the action filter
+rebuild the exact arrays the compiled agents take, `unpack_raw`), so any policy can sit in any
+seat; "planes" is the 19 planes alone, as a Box; "planes_last" the same planes channels-last
+(11, 11, 19), the layout RLlib's default CNN encoder reads.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import replace
+
+import gymnasium as gym
+import numpy as np
+
+from ..features import NUM_PLANES, featurize
+from ..game.constants import NUM_ACTIONS, NUM_AGENTS, TEAM, Result
+from ..game.engine import Game
+from ..game.observation import Observation, empty_observations
+from ..viz.frames import state_frame
+from ..viz.render import draw_frame
+
+REWARD_MODES = ("shaped", "raw")
+RENDER_MODES = ["rgb_array"]  # of the PettingZoo and Gymnasium envs: `MultiAgentTeam.draw`
+
+_TEMPLATE = empty_observations(1).select(0, 0)
+_FIELD_SHAPES = [np.shape(field) for field in _TEMPLATE]
+_FIELD_SIZES = [int(np.prod(shape)) for shape in _FIELD_SHAPES]
+RAW_SIZE = sum(_FIELD_SIZES)
+_SPLITS = np.cumsum(_FIELD_SIZES)[:-1]
+
+PLANES_SPACE = gym.spaces.Box(0.0, 1.0, (NUM_PLANES, 11, 11), np.float32)
+OBSERVATION_SPACE = gym.spaces.Dict({
+    "planes": PLANES_SPACE,
+    "raw": gym.spaces.Box(0, np.iinfo(np.int16).max, (RAW_SIZE,), np.int16),
+})
+ACTION_SPACE = gym.spaces.Discrete(NUM_ACTIONS)
+
+
+def pack_raw(obs: Observation) -> np.ndarray:
+    """Observations of leading shape L -> int16 (L..., RAW_SIZE)."""
+    lead = obs.board.shape[:-2]
+    return np.concatenate(
+        [np.asarray(f).reshape(lead + (-1,)).astype(np.int16) for f in obs], axis=-1)
+
+
+def unpack_raw(raw: np.ndarray) -> Observation:
+    """The inverse of `pack_raw`, with the engine's dtypes, for any leading shape."""
+    raw = np.asarray(raw)
+    lead = raw.shape[:-1]
+    parts = np.split(raw, _SPLITS, axis=-1)
+    return Observation(*(
+        part.reshape(lead + shape).astype(np.asarray(template).dtype)
+        for part, shape, template in zip(parts, _FIELD_SHAPES, _TEMPLATE, strict=True)))
+
+
+def _dict_rows(obs: Observation) -> list[dict[str, np.ndarray]]:
+    planes, raw = featurize(obs), pack_raw(obs)
+    return [{"planes": planes[a], "raw": raw[a]} for a in range(NUM_AGENTS)]
+
+
+# Observation form -> (one agent's space, the four agents' rows from the engine's (4,) rows).
+OBSERVATIONS: dict[str, tuple[gym.Space, Callable[[Observation], list]]] = {
+    "dict": (OBSERVATION_SPACE, _dict_rows),
+    "planes": (PLANES_SPACE, lambda obs: list(featurize(obs))),
+    "planes_last": (gym.spaces.Box(0.0, 1.0, (11, 11, NUM_PLANES), np.float32),
+                    lambda obs: list(np.moveaxis(featurize(obs), -3, -1))),
+}
+
+
+def check_render_mode(render_mode: str | None) -> str | None:
+    if render_mode is not None and render_mode not in RENDER_MODES:
+        raise ValueError(f"render_mode {render_mode!r} is not one of {[None, *RENDER_MODES]}")
+    return render_mode
+
+
+def agent_observations(obs: Observation, form: str = "dict") -> dict[int, object]:
+    """The four agents' observations in `form` from the engine's (4,) observation rows."""
+    return dict(enumerate(OBSERVATIONS[form][1](obs)))
+
+
+class MultiAgentTeam:
+    """The Team game with RLlib's multi-agent API and no Ray (module docstring).
+
+    config: seed, max_steps (default 800), reward ("shaped"|"raw"), observation ("dict"|"planes"|
+    "planes_last"), action_filter and jitter (per-episode activation probabilities of the
+    learner's filters). Other keys are ignored: subclasses read their own (the bench's
+    zero-cost env reads episode_length).
+    """
+
+    def __init__(self, config: dict | None = None):
+        super().__init__()
+        config = dict(config or {})
+        self.game = Game(replace(TEAM, max_steps=int(config.get("max_steps", TEAM.max_steps))))
+        self.observation_form = config.get("observation", "dict")
+        if self.observation_form not in OBSERVATIONS:
+            raise ValueError(f"env config: observation {self.observation_form!r} is not one of "
+                             f"{list(OBSERVATIONS)}")
+        space = OBSERVATIONS[self.observation_form][0]
+        self.possible_agents = list(range(NUM_AGENTS))
+        self.agents = []
+        self.observation_spaces = dict.fromkeys(self.possible_agents, space)
+        self.action_spaces = dict.fromkeys(self.possible_agents, ACTION_SPACE)
+        self._rng = np.random.default_rng(config.get("seed"))
+        self.set_stage(config.get("reward", "shaped"), config.get("action_filter", 0.0),
+                       config.get("jitter", 0.0))
+        self._filters: dict[str, bool] = {}
+        self.last_observation: Observation | None = None
+
+    def set_stage(self, reward: str, action_filter: float, jitter: float) -> None:
+        if reward not in REWARD_MODES:
+            raise ValueError(f"reward mode {reward!r} is not one of {REWARD_MODES}")
+        self.reward_mode = reward
+        self.filter_probabilities = {"action_filter": float(action_filter),
+                                     "jitter": float(jitter)}
+
+    def reset(self, *, seed=None, options=None):
+        if seed is not None:
+            self._rng = np.random.default_rng(seed)
+        self.last_observation = self.game.reset(int(self._rng.integers(2**31)))
+        self._filters = {name: bool(self._rng.random() < p)
+                         for name, p in self.filter_probabilities.items()}
+        self.agents = list(self.possible_agents)
+        observations = agent_observations(self.last_observation, self.observation_form)
+        return observations, {a: {"filters": self._filters} for a in self.agents}
+
+    def step(self, action_dict):
+        actions = np.zeros(NUM_AGENTS, np.int64)  # dead agents play Stop, as in the engine
+        for agent, action in action_dict.items():
+            actions[agent] = action
+        obs, engine_rewards, done, info = self.game.step(actions)
+        self.last_observation = obs
+        alive = self.game.batch.alive[0]
+        all_obs = agent_observations(obs, self.observation_form)
+        acting, self.agents = self.agents, []
+        observations, rewards, terminateds, infos = {}, {}, {}, {}
+        for agent in acting:
+            observations[agent] = all_obs[agent]
+            infos[agent] = {"filters": self._filters}
+            leaves = done or not alive[agent]
+            terminateds[agent] = leaves
+            rewards[agent] = self._final_reward(agent, done, info, engine_rewards, alive) \
+                if leaves else 0.0
+            if done:
+                infos[agent]["winners"] = info.get("winners", [])
+            if not leaves:
+                self.agents.append(agent)
+        terminateds["__all__"] = done
+        return observations, rewards, terminateds, {"__all__": False}, infos
+
+    def _final_reward(self, agent, done, info, engine_rewards, alive) -> float:
+        if self.reward_mode == "raw":
+            return float(engine_rewards[agent]) if done else -1.0
+        if done and info["result"] == Result.WIN and agent in info["winners"]:
+            return 1.0
+        enemies_dead = sum(not alive[e] for e in range(NUM_AGENTS) if e % 2 != agent % 2)
+        return 0.5 if enemies_dead == 1 else -1.0
+
+    def draw(self) -> np.ndarray:
+        """The whole board now, uint8 RGB (H, W, 3), drawn by the replay renderer."""
+        return np.asarray(draw_frame(state_frame(self.game.dump()), self.game.config.max_steps))

@@ -1,0 +1,121 @@
+"""The user-facing envs (no Ray): PettingZoo's API, seed and render tests, Gymnasium's env checker,
+seeded replays, the named policies in the other seats, and bad arguments."""
+
+from __future__ import annotations
+
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+from pettingzoo.test import parallel_api_test, parallel_seed_test, render_test
+from pettingzoo.utils.conversions import parallel_to_aec
+
+from rllib_pommer.envs import ENV_ID, PommeParallelEnv, PommeTeamEnv, parallel_env
+from rllib_pommer.envs.team import PLANES_SPACE
+from rllib_pommer.features import featurize
+from rllib_pommer.game.state import A_COL, A_ROW
+
+
+def test_pettingzoo_api_and_seed():
+    parallel_api_test(parallel_env(max_steps=200), num_cycles=300)
+    parallel_seed_test(lambda: parallel_env(max_steps=200), num_cycles=300)
+
+
+def test_pettingzoo_render():
+    def aec_env(render_mode=None):
+        # render_test builds a "human" env only to read metadata["render_modes"]; we have no
+        # window, so that one is built without rendering.
+        return parallel_to_aec(parallel_env(render_mode=None if render_mode == "human"
+                                            else render_mode, max_steps=200))
+    render_test(aec_env)
+
+
+def test_pettingzoo_observes_the_planes_of_the_game():
+    env = parallel_env()
+    obs, _ = env.reset(seed=4)
+    planes = featurize(env.env.last_observation)
+    assert env.observation_space("player_1") == PLANES_SPACE
+    assert all(np.array_equal(obs[f"player_{a}"], planes[a]) for a in range(4))
+
+
+@pytest.mark.parametrize("render_mode", [None, "rgb_array"])
+def test_gymnasium_check_env(render_mode):
+    env = gym.make(ENV_ID, render_mode=render_mode)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the checker reports most problems as warnings
+        check_env(env.unwrapped)
+
+
+def _episode(env, seed: int, actions: np.random.Generator):
+    obs, _ = env.reset(seed=seed)
+    trace = [obs]
+    done = False
+    while not done:
+        obs, reward, terminated, truncated, _ = env.step(int(actions.integers(6)))
+        trace += [obs, reward]
+        done = terminated or truncated
+    return trace
+
+
+def _same(a, b) -> bool:
+    return len(a) == len(b) and all(np.array_equal(x, y) for x, y in zip(a, b, strict=True))
+
+
+def test_gymnasium_seeded_episodes_replay():
+    first, again = (_episode(gym.make(ENV_ID, max_steps=120), 11, np.random.default_rng(0))
+                    for _ in range(2))
+    assert _same(first, again)
+    other = _episode(gym.make(ENV_ID, max_steps=120), 12, np.random.default_rng(0))
+    assert not np.array_equal(first[0], other[0])  # another board
+
+
+def _others_moved(env, steps: int = 30) -> bool:
+    """Whether any seat but the trained one left its start cell while the trained one stops."""
+    def cells():
+        return np.delete(env.team.game.state.agents[0][:, [A_ROW, A_COL]], env.seat, axis=0)
+    env.reset(seed=3)
+    start = cells()
+    for _ in range(steps):
+        env.step(0)
+    return not np.array_equal(cells(), start)
+
+
+def test_named_policies_take_the_other_seats():
+    assert _others_moved(PommeTeamEnv(seat=1))  # SimpleAgent by default
+    still = PommeTeamEnv(seat=1, teammate="static", opponents=["static", "static"])
+    assert sorted(still.others) == [0, 2, 3]
+    assert not _others_moved(still)
+
+
+def test_gymnasium_render_draws_the_board():
+    env = gym.make(ENV_ID, render_mode="rgb_array")
+    env.reset(seed=0)
+    before = env.render()
+    env.step(1)
+    after = env.render()
+    assert before.dtype == np.uint8 and before.ndim == 3 and before.shape[2] == 3
+    assert before.shape == after.shape and not np.array_equal(before, after)
+
+
+@pytest.mark.parametrize(("make", "message"), [
+    (lambda: PommeTeamEnv(opponents="nobody"), "unknown policy 'nobody'"),
+    (lambda: PommeTeamEnv(opponents=["simple"] * 3), "opponents: one policy or two"),
+    (lambda: PommeTeamEnv(seat=4), "seat 4 is not one of 0..3"),
+    (lambda: PommeTeamEnv(render_mode="human"), "render_mode 'human' is not one of"),
+    (lambda: PommeTeamEnv(observation="pixels"), "observation 'pixels' is not one of"),
+    (lambda: PommeParallelEnv({"reward": "dense"}), "reward mode 'dense' is not one of"),
+])
+def test_bad_arguments_name_what_was_wrong(make, message):
+    with pytest.raises(ValueError, match=message):
+        make()
+
+
+def test_stepping_after_the_agents_episode_is_an_error():
+    env = PommeTeamEnv(max_steps=5)
+    env.reset(seed=0)
+    for _ in range(5):
+        env.step(0)
+    with pytest.raises(ValueError, match="call reset"):
+        env.step(0)
