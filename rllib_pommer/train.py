@@ -46,16 +46,23 @@ def main(argv: list[str] | None = None) -> int:
 
     from .rl.config import check_pi_weights
     from .rl.curriculum import load_curriculum
-    from .rl.training import check_run_dir, init_ray, train
+    from .rl.training import RayStartError, check_run_dir, init_ray, resumes_from_checkpoint, train
 
     try:  # everything that can be checked is checked before Ray starts
+        if args.num_env_runners < 0:
+            raise ValueError(f"--num-env-runners must be 0 or more, got {args.num_env_runners}")
         curriculum = load_curriculum(args.curriculum)
         out = args.out or Path("runs") / curriculum.name
         check_run_dir(out, args.resume)
-        check_pi_weights(Path(args.pi_weights) if args.pi_weights else curriculum.pi_weights)
+        if not resumes_from_checkpoint(out, args.resume):  # else pi comes from the checkpoint
+            check_pi_weights(Path(args.pi_weights) if args.pi_weights else curriculum.pi_weights)
         init_ray(args.address)
     except ValueError as exc:
         parser.error(str(exc))
+    except RayStartError as exc:  # not the user's input: one line and exit 1, no traceback
+        ray.shutdown()
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
     try:
         result = train(curriculum, out, resume=args.resume, pi_weights=args.pi_weights,
                        num_env_runners=args.num_env_runners, seed=args.seed)

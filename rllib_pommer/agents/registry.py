@@ -9,7 +9,8 @@ Jitter Correction, the Action Filter, or both. The wrappers are always stacked i
 `FILTERS`, jitter inside and action filter outside: the safety veto must have the last word, also
 over the SimpleAgent moves that jitter correction injects (SimpleAgent walks into blasts too).
 
-The folder is `policies/` next to the package, or the directory named by RLLIB_POMMER_POLICIES.
+The folder is the repository's `policies/` (a wheel's copy of it), or the directory named by
+RLLIB_POMMER_POLICIES: `shipped.data_dir` finds it from any working directory.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from ..shipped import FOLDERS, data_dir
 from .action_filter import ActionFilter
 from .base import Agent
 from .http_agent import HttpAgent
@@ -40,7 +42,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover - exercised only on Python 3.10
     import tomli as tomllib
 
-POLICIES_ENV_VAR = "RLLIB_POMMER_POLICIES"
+POLICIES_ENV_VAR = FOLDERS["policies"]
 
 # Wrapper name -> wrapper class, innermost first: this order is the stacking order.
 FILTERS: dict[str, Callable[[Agent], Agent]] = {
@@ -127,10 +129,7 @@ def register_kind(kind: str, factory: Callable[[PolicySpec], Agent]) -> None:
 
 
 def policies_dir() -> Path:
-    override = os.environ.get(POLICIES_ENV_VAR)
-    if override:
-        return Path(override)
-    return Path(__file__).resolve().parents[2] / "policies"
+    return data_dir("policies")
 
 
 def policy_names() -> list[str]:

@@ -2,15 +2,20 @@
 
 The stage is a function of one number, the lifetime episode count over all env runners
 (`env_runners/num_episodes_lifetime`), which RLlib checkpoints. So after every iteration, after a
-checkpoint is loaded and when the algorithm is built, the callback recomputes the stage and pushes
-all of it again (idempotent and cheap, rllib-notes K2): the policy mapping on every env runner and
-in `algorithm.config` (so checkpoints carry it), reward mode and filter probabilities on every env,
-and pi's freeze on every learner (requires_grad is not checkpointed). A restarted env runner or a
-restored run therefore picks up the right stage by itself.
+checkpoint is loaded, after env runners are recreated (RLlib builds them from the config it was
+given at the start) and when the algorithm is built, the callback recomputes the stage and pushes
+all of it again (idempotent and cheap, rllib-notes K2): the policy mapping on every env runner
+(each runner's own config, as RLlib's `Algorithm.add_module` sets a new mapping there), reward
+mode and filter probabilities on every env, and pi's freeze on every learner (requires_grad is not
+checkpointed). The algorithm's own config, frozen by RLlib, is left as built: it keeps the first
+stage's mapping, which nothing reads once the env runners exist (an algorithm restored from a
+checkpoint's config is set to its stage by `on_checkpoint_loaded`), and the callback needs no
+state of its own beyond the curriculum.
 
 Each result names the stage in force from now on (`curriculum/stage`, `stage_name`) and the one
-the iteration sampled and trained in (`iteration_stage_name`); they differ on the iteration that
-ends a stage.
+the iteration sampled and trained in (`iteration_stage_name`, and its reward mode
+`iteration_reward`, which says whether the logged returns are shaped or raw); they differ on the
+iteration that ends a stage.
 
 The iteration that ends a stage asks Tune for a checkpoint (`should_checkpoint`) and names the
 stage (`curriculum/ended_stage`), so the state at every stage's end is saved (training.py keeps
@@ -72,10 +77,6 @@ class CurriculumCallback(RLlibCallback):
                         "jitter": stage.jitter}
         algorithm.env_runner_group.foreach_env_runner(
             lambda runner: _push_stage(runner, mapping, env_settings), local_env_runner=True)
-        if getattr(algorithm.config.policy_mapping_fn, "stage", None) != index:
-            algorithm.config._is_frozen = False
-            algorithm.config.multi_agent(policy_mapping_fn=mapping)
-            algorithm.config.freeze()
         algorithm.learner_group.foreach_learner(
             lambda learner: learner.module[LEARNER].set_pi_frozen(stage.freeze_pi))
         return index
@@ -88,6 +89,10 @@ class CurriculumCallback(RLlibCallback):
 
     def on_checkpoint_loaded(self, *, algorithm, **kwargs) -> None:
         self.apply_stage(algorithm, self._lifetime_episodes(algorithm))
+
+    def on_env_runners_recreated(self, *, algorithm, is_evaluation, **kwargs) -> None:
+        if not is_evaluation:
+            self.apply_stage(algorithm, self._lifetime_episodes(algorithm))
 
     def on_train_result(self, *, algorithm, result, **kwargs) -> None:
         episodes = int(result[ENV_RUNNER_RESULTS].get(NUM_EPISODES_LIFETIME, 0))
@@ -102,6 +107,7 @@ class CurriculumCallback(RLlibCallback):
             "stage": index,  # in force from now on
             "stage_name": self.curriculum.stages[index].name,
             "iteration_stage_name": self.curriculum.stages[before].name,  # this one sampled in
+            "iteration_reward": self.curriculum.stages[before].reward,  # its returns' kind
             "episodes": episodes,
             "stage_end_episodes": self.curriculum.stage_end(index),
             "total_episodes": self.curriculum.total_episodes,

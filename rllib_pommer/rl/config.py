@@ -58,10 +58,13 @@ def check_pi_weights(path: Path) -> Path:
 
 
 def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None,
-                 num_env_runners: int = 0, seed: int = 0, env: str = ENV_NAME) -> PPOConfig:
+                 num_env_runners: int = 0, seed: int = 0, env: str = ENV_NAME,
+                 restoring: bool = False) -> PPOConfig:
     """PPO for `curriculum`; `pi_weights` overrides the file's; `env` may name another env with
-    the same spaces (the bench's zero-cost twin)."""
-    weights = check_pi_weights(Path(pi_weights) if pi_weights else curriculum.pi_weights)
+    the same spaces (the bench's zero-cost twin). `restoring`: the algorithm will load a
+    checkpoint, which holds pi, so the imitation weights may be absent (rl_module.py)."""
+    weights = Path(pi_weights) if pi_weights else curriculum.pi_weights
+    weights = weights.resolve() if restoring else check_pi_weights(weights)
     first = curriculum.stages[0]
     ppo = curriculum.ppo
     modules = {LEARNER: RLModuleSpec(module_class=PommerPPOModule,

@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import Any
 
 from ..agents.registry import policies_dir, policy_names, resolve_policy
+from ..shipped import data_dir
 from .env import REWARD_MODES
 
 if sys.version_info >= (3, 11):
@@ -37,7 +38,6 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-CURRICULUM_DIR = Path(__file__).resolve().parents[2] / "curriculum"
 SCRIPTED_KINDS = ("static", "random", "simple", "simple_nobomb", "smart_random", "suicide")
 NET_KINDS = ("learned", "rllib_checkpoint")
 # PPO options a file may set (the paper fixes entropy 0, clip 0.01 and minibatch 128).
@@ -105,19 +105,25 @@ class Curriculum:
         return names
 
 
+def curriculum_dir() -> Path:
+    """The shipped curricula: the repository's `curriculum/` (a wheel's copy of it), or the
+    folder named by RLLIB_POMMER_CURRICULA, found from any working directory (shipped.py)."""
+    return data_dir("curriculum")
+
+
 def curriculum_names() -> list[str]:
-    return sorted(path.stem for path in CURRICULUM_DIR.glob("*.toml"))
+    return sorted(path.stem for path in curriculum_dir().glob("*.toml"))
 
 
 def find_curriculum(name_or_path: str | Path) -> Path:
     path = Path(name_or_path)
     if path.is_file():
         return path.resolve()
-    named = CURRICULUM_DIR / f"{name_or_path}.toml"
+    named = curriculum_dir() / f"{name_or_path}.toml"
     if named.is_file():
         return named
     raise ValueError(f"curriculum {str(name_or_path)!r} not found; valid names: "
-                     f"{curriculum_names()} (in {CURRICULUM_DIR}), or a path to a .toml file")
+                     f"{curriculum_names()} (in {curriculum_dir()}), or a path to a .toml file")
 
 
 def _check_keys(where: str, table: dict, valid) -> None:

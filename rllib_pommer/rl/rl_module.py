@@ -1,9 +1,18 @@
 """The trained module: the paper's policy CNN and a separate value CNN, no shared trunk.
 
 pi is `PommerNet(6)` (the same class behaviour cloning trains, so its state_dict loads as is), vf
-a `PommerNet(1)` of its own, so value learning never moves the imitation policy. pi's weights come
-from `model_config["pi_weights"]`, loaded only where the module is trained: env runners hold
-inference-only copies that the weight sync fills, so a cluster node needs no weights file.
+a `PommerNet(1)` of its own, so value learning never moves the imitation policy. pi's starting
+weights come from `model_config["pi_weights"]`, loaded only where the module is trained: env
+runners hold inference-only copies that the weight sync fills, so a cluster node needs no weights
+file.
+
+A checkpoint is self-contained: it holds pi and vf as trained, and restoring one (Tune's resume,
+`Algorithm.from_checkpoint`, `RLModule.from_checkpoint`) rebuilds the module from the model config
+saved with it, whose `pi_weights` is an absolute path on the machine that started the run, then
+overwrites every weight with the checkpoint's. So a weights file that is missing at build time is
+not an error here: pi starts empty and `pi_source` says so, until `set_state` fills it. Only a
+module that is about to be trained with neither source is wrong, and the learner refuses that
+(`require_pi`); a new run's weights file is checked before Ray starts (config.check_pi_weights).
 
 Speed (`python -m rllib_pommer.bench learn`, one thread): both networks keep their tensors
 channels-last, which oneDNN's CPU convolutions run about 1.4x faster than NCHW, and run under
@@ -19,6 +28,8 @@ every restore and every iteration.
 """
 
 from __future__ import annotations
+
+from pathlib import Path
 
 import torch
 from ray.rllib.core.columns import Columns
@@ -37,9 +48,24 @@ class PommerPPOModule(TorchRLModule, ValueFunctionAPI):
     def setup(self):
         self.pi = PommerNet(6, dropout=0.0).to(memory_format=torch.channels_last)
         self.vf = PommerNet(1).to(memory_format=torch.channels_last)
+        self.pi_source: str | None = None  # where pi's weights came from (module docstring)
         weights = self.model_config.get("pi_weights")
-        if weights and not self.inference_only:
+        if weights and not self.inference_only and Path(weights).is_file():
             self.pi.load_state_dict(load_policy_net(weights).state_dict())
+            self.pi_source = f"imitation weights {weights}"
+
+    def set_state(self, state) -> None:
+        super().set_state(state)
+        self.pi_source = "checkpoint"
+
+    def require_pi(self) -> None:
+        """Refuse to train a pi that neither the imitation weights nor a checkpoint filled."""
+        if self.pi_source is None:
+            raise ValueError(
+                f"the learner's pi has no weights: the imitation weights "
+                f"{self.model_config.get('pi_weights')} were not found when the module was built, "
+                f"and no checkpoint was restored into it (start a new run where that file exists, "
+                f"or pass --pi-weights)")
 
     @staticmethod
     def _planes(batch) -> torch.Tensor:

@@ -38,16 +38,29 @@ from .curriculum import Curriculum
 STOP_KEY = "env_runners/num_episodes_lifetime"
 
 
+class RayStartError(RuntimeError):
+    """Ray did not come up. Its traceback (GCS time-outs, raylet logs) tells a user little; the
+    message names the failure in one line and what to check."""
+
+
+RAY_START_HINT = ("check free memory and disk (Ray writes to /tmp/ray and /dev/shm), whether "
+                  "Ray processes of an earlier run linger (`ray status`), and the logs in "
+                  "/tmp/ray/session_latest/logs")
+
+
+def _first_line(exc: BaseException) -> str:
+    text = str(exc).strip()
+    return f"{type(exc).__name__}: {text.splitlines()[0] if text else ''}".rstrip(": ")
+
+
 def init_ray(address: str | None) -> None:
     """A Ray instance of our own on this machine (at most 2 CPUs), or an existing cluster at
     `address`. Our own, even where `ray start` left a cluster running here: a plain `ray.init()`
-    would join that one (and refuse `num_cpus`)."""
+    would join that one (and refuse `num_cpus`). A bad address is a ValueError; a Ray that does
+    not start, a `RayStartError`."""
     torch.set_num_threads(1)
     torch.set_flush_denormal(True)
-    if address is None:
-        ray.init(address="local", num_cpus=2, include_dashboard=False)
-        return
-    if address != "auto":
+    if address is not None and address != "auto":
         host, _, port = address.removeprefix("ray://").rpartition(":")
         try:
             socket.create_connection((host or "127.0.0.1", int(port)), timeout=5).close()
@@ -55,14 +68,19 @@ def init_ray(address: str | None) -> None:
             raise ValueError(f"Ray address {address!r} is unreachable ({exc}); expected "
                              f"HOST:PORT of a running cluster's head, or 'auto'") from None
     try:
-        ray.init(address=address)
-    except ConnectionError as exc:
-        if "AuthToken" not in f"{exc} {exc.__cause__}":
-            raise
-        raise ValueError(
-            f"the Ray cluster at {address!r} wants a token (`ray start` turns token "
-            f"authentication on): run with RAY_AUTH_MODE=token and the cluster's token in "
-            f"~/.ray/auth_token, RAY_AUTH_TOKEN or RAY_AUTH_TOKEN_PATH") from None
+        if address is None:
+            ray.init(address="local", num_cpus=2, include_dashboard=False)
+        else:
+            ray.init(address=address)
+    except Exception as exc:  # Ray raises many types here; each becomes one line
+        if address is not None and "AuthToken" in f"{exc} {exc.__cause__}":
+            raise ValueError(
+                f"the Ray cluster at {address!r} wants a token (`ray start` turns token "
+                f"authentication on): run with RAY_AUTH_MODE=token and the cluster's token in "
+                f"~/.ray/auth_token, RAY_AUTH_TOKEN or RAY_AUTH_TOKEN_PATH") from None
+        where = f"the Ray cluster at {address!r}" if address else "a local Ray instance"
+        raise RayStartError(f"{where} did not start ({_first_line(exc)}); "
+                            f"{RAY_START_HINT}") from None
 
 
 def _duration(seconds: float) -> str:
@@ -175,6 +193,19 @@ def _unreadable(path: Path) -> str | None:
     return None
 
 
+def trial_dirs(out: Path) -> list[Path]:
+    """The Tune trial folders of the run in `out`."""
+    return sorted(p for p in Path(out).resolve().glob("*") if (p / "params.json").is_file())
+
+
+def resumes_from_checkpoint(out: Path, resume: bool) -> bool:
+    """Whether a (re)start of the run in `out` loads a checkpoint, so that pi comes from it and
+    not from the imitation weights: a resume of a run whose trials all have one (Tune restarts a
+    trial without a checkpoint from scratch)."""
+    trials = trial_dirs(out)
+    return resume and bool(trials) and all(any(t.glob("checkpoint_*")) for t in trials)
+
+
 def train(curriculum: Curriculum, out: Path, *, resume: bool = False,
           pi_weights: str | Path | None = None, num_env_runners: int = 0, seed: int = 0):
     """Run (or resume) `curriculum` into the run directory `out`; Ray must be initialised."""
@@ -183,7 +214,7 @@ def train(curriculum: Curriculum, out: Path, *, resume: bool = False,
     # disk always names the latest trial checkpoint and a SIGKILLed run resumes from it.
     os.environ.setdefault("TUNE_GLOBAL_CHECKPOINT_S", "0")
     config = build_config(curriculum, pi_weights=pi_weights, num_env_runners=num_env_runners,
-                          seed=seed)
+                          seed=seed, restoring=resumes_from_checkpoint(out, resume))
     check_run_dir(out, resume)
     if resume:
         tuner = tune.Tuner.restore(str(out), trainable=config.algo_class, param_space=config,
@@ -222,7 +253,7 @@ def pack_run(out: Path) -> dict:
     if not tune.Tuner.can_restore(str(out)):
         raise ValueError(f"--pack: no run in {out}")
     kept = {}
-    for trial in sorted(p for p in out.iterdir() if (p / "params.json").is_file()):
+    for trial in trial_dirs(out):
         checkpoints = sorted(trial.glob("checkpoint_*"), key=_checkpoint_number)
         write_summary(trial, trial, HISTORY_FILE)
         results = trial / "result.json"

@@ -125,3 +125,73 @@ def test_run_folders_are_checked_by_relative_path_too(tmp_path, monkeypatch):
         check_run_dir(Path("file"), resume=False)
     with pytest.raises(ValueError, match="--pack: no run in"):
         pack_run(Path("runs") / "new")
+
+
+def _no_ray(monkeypatch):
+    """Ray never starts: a start is noted in the returned list and fails (train exits 1)."""
+    import ray
+
+    started = []
+
+    def note(**kwargs):
+        started.append(kwargs)
+        raise RuntimeError("not in this test")
+
+    monkeypatch.setattr(ray, "init", note)
+    return started
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--num-env-runners", "-1"], ["--num-env-runners must be 0 or more, got -1"]),
+    (["--curriculum", "no_such_curriculum"], ["curriculum 'no_such_curriculum' not found"]),
+    (["--pi-weights", "absent.pt"], ["imitation weights not found: absent.pt"]),
+    (["--resume"], ["--resume: no run to resume"]),
+])
+def test_train_checks_its_arguments_before_ray_starts(tmp_path, monkeypatch, capsys, args, words):
+    from rllib_pommer.train import main
+
+    started = _no_ray(monkeypatch)
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as exited:
+        main(["--curriculum", "smoke", "--out", str(tmp_path / "run"), *args])
+    assert exited.value.code == 2 and started == []
+    for word in words:
+        assert word in capsys.readouterr().err
+
+
+def test_a_resume_without_a_checkpoint_needs_the_weights(tmp_path, monkeypatch, capsys):
+    """Tune restarts a trial that has no checkpoint from scratch: pi must come from the file."""
+    from rllib_pommer.train import main
+
+    started = _no_ray(monkeypatch)
+    run = tmp_path / "run"
+    (run / "PPO_pommerman_team_0").mkdir(parents=True)
+    (run / "PPO_pommerman_team_0" / "params.json").write_text("{}")
+    monkeypatch.setattr("ray.tune.Tuner.can_restore", lambda path: True)
+    with pytest.raises(SystemExit):
+        main(["--curriculum", "smoke", "--out", str(run), "--resume",
+              "--pi-weights", str(tmp_path / "absent.pt")])
+    assert started == [] and "imitation weights not found" in capsys.readouterr().err
+    (run / "PPO_pommerman_team_0" / "checkpoint_000000").mkdir()  # pi comes from it
+    assert main(["--curriculum", "smoke", "--out", str(run), "--resume",
+                 "--pi-weights", str(tmp_path / "absent.pt")]) == 1
+    assert len(started) == 1  # got as far as starting Ray
+
+
+def test_a_ray_that_does_not_start_is_one_line_with_what_to_check(tmp_path, monkeypatch, capsys,
+                                                                 pi_weights):
+    import ray
+
+    from rllib_pommer.train import main
+
+    def time_out(**kwargs):
+        raise TimeoutError("Timed out after 60 seconds waiting for the GCS to start.\n"
+                           "  File ... (a long traceback)")
+
+    monkeypatch.setattr(ray, "init", time_out)
+    assert main(["--curriculum", "smoke", "--out", str(tmp_path / "run"),
+                 "--pi-weights", str(pi_weights)]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("error: a local Ray instance did not start "
+                                                   "(TimeoutError: Timed out after 60 seconds")
+    assert "/tmp/ray/session_latest/logs" in err and "Traceback" not in err

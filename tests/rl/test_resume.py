@@ -22,8 +22,9 @@ REPO = Path(__file__).resolve().parents[2]
 
 
 def _train(out, pi_weights, *extra):
+    weights = ["--pi-weights", str(pi_weights)] if pi_weights else []
     return [sys.executable, "-m", "rllib_pommer.train", "--curriculum", "smoke", "--out",
-            str(out), "--pi-weights", str(pi_weights), *extra]
+            str(out), *weights, *extra]
 
 
 def _results(out):
@@ -88,8 +89,18 @@ def _interrupt(process) -> int:
 
 def test_a_packed_run_resumes_at_another_path(tmp_path, pi_weights):
     """Stop a run, pack it, move it to another folder (as a fresh clone would hold it) and resume
-    it from another working directory: it goes on from its checkpoint, same lifetime episode
-    count and stage, and its history reads as one run."""
+    it from another working directory, on a machine without the imitation weights it started
+    from: it goes on from its checkpoint, same lifetime episode count and stage, its history
+    reads as one run, and the arena plays it."""
+    started_from = tmp_path / "first" / "weights" / "pi.pt"  # removed with the old place
+    started_from.parent.mkdir(parents=True)
+    shutil.copy(pi_weights, started_from)
+    pi_weights = started_from
+    scripted = tmp_path / "scripted_policies"  # a policies folder without any learned policy
+    scripted.mkdir()
+    for policy in ("simple", "static", "suicide"):
+        shutil.copy(REPO / "policies" / f"{policy}.toml", scripted)
+    elsewhere = {**os.environ, "RLLIB_POMMER_POLICIES": str(scripted)}
     curriculum = tmp_path / "long_smoke.toml"
     smoke = (REPO / "curriculum" / "smoke.toml").read_text()
     assert 'opponent = "static"\nepisodes = 12' in smoke
@@ -119,10 +130,10 @@ def test_a_packed_run_resumes_at_another_path(tmp_path, pi_weights):
     moved = tmp_path / "clone" / "campaign" / "run"
     shutil.copytree(first, moved)
     shutil.rmtree(tmp_path / "first")  # nothing may point back to the old place
-    process = subprocess.Popen(_train(moved, pi_weights, "--curriculum", str(curriculum),
-                                      "--resume"),
+    assert not pi_weights.exists()
+    process = subprocess.Popen(_train(moved, None, "--curriculum", str(curriculum), "--resume"),
                                cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                               start_new_session=True)
+                               start_new_session=True, env=elsewhere)
     moved_trial = moved / trial.name
     _wait_for(lambda: len(read_rows(moved_trial)) >= len(before) + 2, process, 240,
               "2 iterations after the resume")
@@ -136,3 +147,7 @@ def test_a_packed_run_resumes_at_another_path(tmp_path, pi_weights):
             == lifetime > 12)  # past the warm-up's 12 episodes: in the second stage
     assert resumed["curriculum/iteration_stage_name"] == last[
         "curriculum/iteration_stage_name"] == "static"
+    played = subprocess.run([sys.executable, "-m", "rllib_pommer.evaluate", "--team", str(moved),
+                             "--vs", "static", "--games", "2", "--workers", "1"], cwd=tmp_path,
+                            capture_output=True, text=True, timeout=300, env=elsewhere)
+    assert played.returncode == 0 and "2 games" in played.stdout, played.stderr[-2000:]

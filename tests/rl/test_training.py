@@ -58,15 +58,20 @@ def smoke(ray_session, pi_weights, tmp_path_factory):
     episodes = algo.env_runner.sample(num_timesteps=300, explore=True)
     checkpoint = algo.save(str(tmp_path_factory.mktemp("ckpt"))).checkpoint.path
     learner_pi = _snapshot(learner.pi)
+    mappings = (algo.config.policy_mapping_fn.stage, algo.env_runner.config.policy_mapping_fn.stage)
     algo.stop()
     yield {"config": config, "iterations": iterations, "episodes": episodes,
-           "checkpoint": checkpoint, "learner_pi": learner_pi, "curriculum": curriculum}
+           "checkpoint": checkpoint, "learner_pi": learner_pi, "curriculum": curriculum,
+           "mappings": mappings}
 
 
 def test_stage_boundary_and_warmup_freeze(smoke):
     iterations = smoke["iterations"]
     stages = [it["stage"] for it in iterations]
     assert stages[0] == 0 and stages[-1] == 1
+    # The new stage's mapping is on the env runner; RLlib's frozen algorithm config is left as
+    # built (the callback no longer unfreezes it).
+    assert smoke["mappings"] == (0, 1)
     for it in iterations:
         assert it["vf_changed"]
         assert it["pi_changed"] == (it["stage"] == 1), "pi must move only after the warm-up"

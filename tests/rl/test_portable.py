@@ -1,0 +1,105 @@
+"""A checkpoint is self-contained: the committed campaign's checkpoint, made before this was so,
+restores (module alone and whole algorithm, with its pickled curriculum callback) where the
+imitation weights file it names no longer exists. (A packed run moved, resumed and played without
+its weights file: test_resume.py.)"""
+
+from __future__ import annotations
+
+import io
+import json
+import re
+import shlex
+import subprocess
+import sys
+import tarfile
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+CAMPAIGN = "campaign/paper"
+
+RESTORE = """
+import json, sys
+from pathlib import Path
+import ray, torch
+from ray.rllib.algorithms.algorithm import Algorithm
+from ray.rllib.core.rl_module.rl_module import RLModule
+from rllib_pommer.rl.checkpoint_policy import load_checkpoint_net
+from rllib_pommer.rl.rl_module import LEARNER
+
+checkpoint, weights = Path(sys.argv[1]), Path(sys.argv[2])
+expected = load_checkpoint_net(checkpoint).state_dict()
+same = lambda pi: all(torch.equal(pi.state_dict()[k], v) for k, v in expected.items())
+module = RLModule.from_checkpoint(checkpoint / "learner_group/learner/rl_module/learner")
+ray.init(address="local", num_cpus=2, include_dashboard=False)
+try:
+    algo = Algorithm.from_checkpoint(str(checkpoint))
+    learner = algo.learner_group._learner.module[LEARNER]
+    print(json.dumps({
+        "weights_visible": weights.exists(), "module_pi": same(module.pi),
+        "module_source": module.pi_source, "algo_pi": same(learner.pi),
+        "algo_source": learner.pi_source, "pi_frozen": learner.pi_frozen,
+        "mapping_stage": algo.env_runner.config.policy_mapping_fn.stage}))
+    algo.stop()
+finally:
+    ray.shutdown()
+"""
+
+
+def _committed_pack(into: Path) -> Path:
+    """The campaign folder as committed (the working copy may be a live run's)."""
+    archive = subprocess.run(["git", "archive", "HEAD", CAMPAIGN], cwd=REPO, capture_output=True,
+                             check=True).stdout
+    with tarfile.open(fileobj=io.BytesIO(archive)) as tar:
+        tar.extractall(into, filter="data")
+    return into / CAMPAIGN
+
+
+def _hiding(path: Path) -> list[str]:
+    """A command prefix under which `path` does not exist: where it does, its folder is covered
+    by an empty tmpfs in a private mount namespace (root only; nothing outside sees it)."""
+    if not path.exists():
+        return []
+    cover = f"mount -t tmpfs none {shlex.quote(str(path.parent))}"
+    probe = subprocess.run(["unshare", "-m", "sh", "-c", cover], capture_output=True, text=True)
+    if probe.returncode != 0:
+        pytest.skip(f"cannot hide {path} here (no private mount namespace: {probe.stderr[:200]})")
+    return ["unshare", "-m", "sh", "-c", f'{cover} && exec "$@"', "sh"]
+
+
+def test_the_committed_campaign_checkpoint_restores_without_its_weights_file(tmp_path):
+    run = _committed_pack(tmp_path)
+    (trial,) = [p for p in run.iterdir() if (p / "params.json").is_file()]
+    checkpoint = max(trial.glob("checkpoint_*"))
+    named = re.search(r"'pi_weights': '([^']+)'", (trial / "params.json").read_text())
+    weights = Path(named.group(1))  # the absolute path the run was built with
+    done = subprocess.run([*_hiding(weights), sys.executable, "-c", RESTORE, str(checkpoint),
+                           str(weights)], cwd=tmp_path, capture_output=True, text=True,
+                          timeout=600)
+    assert done.returncode == 0, done.stderr[-3000:]
+    seen = json.loads(done.stdout.strip().splitlines()[-1])
+    assert seen == {"weights_visible": False, "module_pi": True, "module_source": "checkpoint",
+                    "algo_pi": True, "algo_source": "checkpoint",
+                    "pi_frozen": True, "mapping_stage": 0}  # in the value warm-up, as it was
+
+
+def test_the_module_takes_pi_from_the_weights_or_a_checkpoint_and_never_trains_without(
+        tmp_path, pi_weights):
+    from rllib_pommer.rl.env import ACTION_SPACE, OBSERVATION_SPACE
+    from rllib_pommer.rl.rl_module import PommerPPOModule
+
+    def module(weights):
+        return PommerPPOModule(observation_space=OBSERVATION_SPACE, action_space=ACTION_SPACE,
+                               model_config={"pi_weights": str(weights)})
+
+    started = module(pi_weights)
+    assert started.pi_source == f"imitation weights {pi_weights}"
+    started.require_pi()
+    moved = module(tmp_path / "gone" / "pi.pt")  # as restoring on another machine builds it
+    assert moved.pi_source is None
+    with pytest.raises(ValueError, match=r"pi has no weights: .*gone/pi.pt were not found"):
+        moved.require_pi()
+    moved.set_state(started.get_state())  # what a restore does next
+    assert moved.pi_source == "checkpoint"
+    moved.require_pi()
