@@ -32,9 +32,8 @@ ENV_NAME = "pommerman_team"
 
 
 class PommeEnv(MultiAgentTeam, MultiAgentEnv):
-    """The Team game for RLlib. env_config: seed, max_steps (default 800), reward ("shaped"|
-    "raw"), observation ("dict"|"planes"|"planes_last"), action_filter and jitter (per-episode
-    activation probabilities of the learner's filters)."""
+    """The Team game for RLlib: `MultiAgentTeam` (whose docstring lists the env_config keys)
+    as a `MultiAgentEnv`."""
 
 
 register_env(ENV_NAME, PommeEnv)
