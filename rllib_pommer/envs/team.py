@@ -91,6 +91,7 @@ OBSERVATIONS: dict[str, tuple[gym.Space, Callable[[Observation], list]]] = {
 
 
 def check_render_mode(render_mode: str | None) -> str | None:
+    """`render_mode` if the PettingZoo and Gymnasium envs can draw it, else a ValueError."""
     if render_mode is not None and render_mode not in RENDER_MODES:
         raise ValueError(f"render_mode {render_mode!r} is not one of {[None, *RENDER_MODES]}")
     return render_mode
@@ -111,7 +112,7 @@ class MultiAgentTeam:
     """
 
     def __init__(self, config: dict | None = None):
-        super().__init__()
+        super().__init__()  # rl/env.PommeEnv puts RLlib's MultiAgentEnv next in line
         config = dict(config or {})
         self.game = Game(replace(TEAM, max_steps=int(config.get("max_steps", TEAM.max_steps))))
         self.observation_form = config.get("observation", "dict")
