@@ -74,14 +74,13 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as exc:
         print(f"error: cannot serve on {args.host}:{args.port} ({exc})", file=sys.stderr)
         return 2
-    forfeit = f" ({game.forfeit['reason']})" if game.forfeit else ""
-    print(f"{game.result()}{forfeit} after {game.step} steps; {game.info['result_name']}"
-          + (f", winners {game.info['winners']}" if game.info.get("winners") else ""))
-    if table.save_error:
-        print(f"error: {table.save_error}", file=sys.stderr)
+    print(game.summary())
+    for error in table.errors:
+        print(f"error: {error}", file=sys.stderr)
+    if not table.saved:
         return 1
     print(f"replay saved to {out}: python -m rllib_pommer.replay html {out} --out game.html")
-    return 0
+    return 1 if table.errors else 0
 
 
 if __name__ == "__main__":

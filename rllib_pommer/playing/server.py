@@ -15,8 +15,9 @@ token 403, a move that cannot be played now 409 (another step, paused, a dead ag
 over); none of them touches the game. The clock plays a step as soon as the person moves, or with
 Stop when the turn time runs out ("wait": never); it starts when a page takes the seat and stops
 while paused. Once the person's agent is dead the others play on at the turn time (`WATCH_STEP`
-under "wait"). When the game ends, by a result or a forfeit, the replay is written and `done` set.
-Agents act in a worker thread, so a slow remote agent never stalls the page's requests.
+under "wait"). When the game ends, by a result, a forfeit or an agent failing (a remote agent's
+malformed answer, say), the replay is written and `done` set. Agents act in a worker thread, so a
+slow remote agent never stalls the page's requests.
 """
 
 from __future__ import annotations
@@ -131,7 +132,7 @@ class Table:
         self.seated = asyncio.Event()
         self.done = asyncio.Event()
         self.saved: Path | None = None
-        self.save_error: str | None = None
+        self.errors: list[str] = []  # what went wrong besides the game: a failed agent or write
 
     def settings(self) -> dict:
         return {"turnTime": self.turn_time, "paused": self.paused}
@@ -209,6 +210,9 @@ class Table:
             self.busy = True
             try:
                 await asyncio.to_thread(self.game.advance, action)
+            except Exception as exc:  # a failing agent ends the game, which is still saved
+                self.errors.append(f"the game stopped at step {self.game.step}: {exc}")
+                self.game.stop(str(exc))
             finally:
                 self.busy, self.move = False, None
             await self.send({"type": "frame", **self.game.view(), **self.settings()})
@@ -219,10 +223,10 @@ class Table:
             await asyncio.to_thread(write_games, self.out, [self.game.record()])
             self.saved = self.out
         except OSError as exc:
-            self.save_error = f"could not write the replay to {self.out}: {exc}"
+            self.errors.append(f"could not write the replay to {self.out}: {exc}")
         await self.send({"type": "over", **self.game.view(), **self.settings(),
                           "replay": str(self.saved) if self.saved else None,
-                          "error": self.save_error})
+                          "error": "; ".join(self.errors) or None})
         if self.page is not None:
             await self.page.close()
         self.done.set()
@@ -232,7 +236,7 @@ class Table:
         return {"seat": self.game.spec.seat, "players": self.game.players,
                 "step": self.game.step, "actions": [s["actions"] for s in record["steps"]],
                 "over": self.game.over, "result": self.game.result(),
-                "forfeit": self.game.forfeit, **self.settings(),
+                "forfeit": self.game.forfeit, "stopped": self.game.stopped, **self.settings(),
                 "replay": str(self.saved) if self.saved else None}
 
 
@@ -257,9 +261,7 @@ def _page_data(table: Table) -> dict:
     return {
         "title": f"You (agent {spec.seat}) and {partner} against {spec.vs} · seed {spec.seed}",
         "board": board_assets(game.game.config.board_size),
-        "seat": spec.seat,
         "players": players,
-        "turnTimeRange": list(TURN_TIME_RANGE),
     }
 
 

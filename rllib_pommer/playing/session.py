@@ -6,7 +6,7 @@ other seats are built by the arena's registry (`make_agent`), so any policy name
 learned, a PPO run, or an `http` remote agent. The game is recorded as it is played, with every
 agent's observations (the person's are what the page showed), in the schema `replay verify`,
 `render` and `html` read; a game the person leaves early is recorded up to its last step and
-marked as a forfeit.
+marked as a forfeit, and one an agent broke off (see `stop`) as stopped.
 """
 
 from __future__ import annotations
@@ -81,6 +81,7 @@ class HumanGame:
         self.recorder.start()
         self.info: dict = {"result": int(Result.INCOMPLETE), "result_name": "Incomplete"}
         self.forfeit: dict | None = None
+        self.stopped: dict | None = None
 
     @property
     def step(self) -> int:
@@ -88,7 +89,7 @@ class HumanGame:
 
     @property
     def over(self) -> bool:
-        return self.game.done or self.forfeit is not None
+        return self.game.done or self.forfeit is not None or self.stopped is not None
 
     @property
     def human_alive(self) -> bool:
@@ -116,6 +117,11 @@ class HumanGame:
         if not self.over:
             self.forfeit = {"seat": self.spec.seat, "step": self.step, "reason": reason}
 
+    def stop(self, reason: str) -> None:
+        """An agent failed (a remote agent's malformed answer, say): the game stops unfinished."""
+        if not self.over:
+            self.stopped = {"step": self.step, "reason": reason}
+
     def result(self) -> str:
         """For the person's team: win, loss, tie, forfeit, or unfinished."""
         if self.forfeit:
@@ -124,6 +130,15 @@ class HumanGame:
             return "unfinished"
         winners = self.info.get("winners", [])
         return "tie" if not winners else "win" if self.spec.seat in winners else "loss"
+
+    def summary(self) -> str:
+        """One line: the result for the person's team, why it ended early if it did, the
+        steps played and the engine's result."""
+        early = self.forfeit or self.stopped
+        reason = f" ({early['reason']})" if early else ""
+        winners = f", winners {self.info['winners']}" if self.info.get("winners") else ""
+        return (f"{self.result()}{reason} after {self.step} steps; "
+                f"{self.info['result_name']}{winners}")
 
     def _state(self) -> dict:
         steps = self.recorder.record["steps"]
@@ -146,10 +161,11 @@ class HumanGame:
             "result": self.result(),
             "info": self.info,
             "forfeit": self.forfeit,
+            "stopped": self.stopped,
         }
 
     def record(self) -> dict:
         """The game record so far (finished or not), with the person's result."""
         record = self.recorder.finish()
-        record.update(human_result=self.result(), forfeit=self.forfeit)
+        record.update(human_result=self.result(), forfeit=self.forfeit, stopped=self.stopped)
         return record

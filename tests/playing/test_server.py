@@ -6,11 +6,15 @@ from __future__ import annotations
 
 import asyncio
 
+from aiohttp import web
+
 from rllib_pommer.game.constants import Action
 from rllib_pommer.game.records import read_games
 from rllib_pommer.game.verify import verify_games
 from rllib_pommer.playing.server import MAX_BODY_BYTES, TOKEN_HEADER
+from rllib_pommer.playing.session import PlaySpec
 
+from ..serving.conftest import http_policy
 from .conftest import SPEC, Seat, run_server
 
 
@@ -195,3 +199,37 @@ def test_a_page_closed_before_any_move_saves_an_empty_game(tmp_path):
     (record,) = read_games(out)
     assert record["num_steps"] == 0 and record["forfeit"]["step"] == 0
     assert verify_games([record]).mismatches == []
+
+
+def broken_remote() -> web.Application:
+    """A remote agent that takes its seat, then answers /action with an action out of range."""
+    async def init_agent(request: web.Request) -> web.Response:
+        return web.json_response({"success": True})
+
+    async def action(request: web.Request) -> web.Response:
+        return web.json_response({"action": 9})
+
+    app = web.Application()
+    app.router.add_post("/init_agent", init_agent)
+    app.router.add_post("/action", action)
+    return app
+
+
+def test_a_failing_agent_stops_the_game_which_is_saved_and_told(serve, tmp_path):
+    remote = http_policy(tmp_path, [serve(broken_remote()), serve(broken_remote())])
+    out = tmp_path / "game.jsonl"
+
+    async def scenario(client, table):
+        seat = await Seat.take(client)
+        await seat.post("/move", {"action": "up", "step": 0})
+        over = await seat.next_message("over")
+        await asyncio.wait_for(table.done.wait(), 10)
+        return over, table.errors
+
+    over, errors = run_server(scenario, out, spec=PlaySpec("simple", str(remote), seat=0))
+    assert over["over"] and over["result"] == "unfinished" and over["replay"] == str(out)
+    assert errors == [over["error"]]
+    assert over["error"].startswith("the game stopped at step 0: remote agent at 127.0.0.1:")
+    assert "answered /action with" in over["error"]
+    (record,) = read_games(out)
+    assert record["stopped"]["step"] == 0 and record["num_steps"] == 0
