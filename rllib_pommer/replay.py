@@ -29,7 +29,12 @@ from .viz.viewer import write_viewer
 def _verify(args: argparse.Namespace) -> int:
     def records():
         for path in args.files:
-            yield from read_games(path)
+            empty = True
+            for record in read_games(path):
+                empty = False
+                yield record
+            if empty:
+                raise ValueError(f"{path}: no game records: nothing to verify")
 
     report = verify_games(records())
     for mismatch in report.mismatches[: args.max_report]:
@@ -59,6 +64,16 @@ def _html(args: argparse.Namespace) -> int:
     return 0
 
 
+def _positive_fps(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = 0.0
+    if not 0 < value <= 100:  # a GIF frame lasts at least 10 ms
+        raise argparse.ArgumentTypeError(f"must be in (0, 100] steps per second, got {text}")
+    return value
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m rllib_pommer.replay", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -79,7 +94,7 @@ def main(argv: list[str] | None = None) -> int:
     render.add_argument("--out", required=True, help="OUT.png or OUT.gif")
     render.add_argument("--step", type=int, help="the PNG's step, from 0 (default: the last)")
     render.add_argument("--fog", type=int, metavar="AGENT", help="show what AGENT sees")
-    render.add_argument("--fps", type=float, default=8, help="GIF steps per second")
+    render.add_argument("--fps", type=_positive_fps, default=8, help="GIF steps per second")
     render.set_defaults(run=_render)
     html = sub.add_parser("html", help="write a self-contained HTML replay viewer")
     html.add_argument("file", help="games as .jsonl or .jsonl.gz")

@@ -24,7 +24,7 @@ from collections import Counter
 from collections.abc import Iterator
 from pathlib import Path
 
-from .game.records import read_games
+from .game.records import read_games, read_jsonl
 from .viz.behaviour import heatmaps_by_opponent
 from .viz.figures import (
     FIG5_MARKS,
@@ -63,7 +63,7 @@ def kind_of(path: Path) -> str:
         with open(path, newline="") as f:
             first = dict.fromkeys(next(csv.reader(f), []))
     else:
-        first = next(read_games(path), {})
+        first = next(read_jsonl(path), {})
     if "initial_state" in first and "steps" in first:
         return "replays"
     if set(first) >= ROW_KEYS:

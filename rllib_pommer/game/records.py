@@ -22,19 +22,59 @@ def _open(path: Path, mode: str):
     return gzip.open(path, mode + "t") if path.suffix == ".gz" else open(path, mode)
 
 
-def read_games(path: str | Path) -> Iterator[dict]:
-    """Yield the game records of a .jsonl or .jsonl.gz file, one at a time."""
+# What every step of a record holds (the observations are optional: `has_observations`).
+STEP_FIELDS = ("actions", "state", "rewards", "done", "info")
+
+
+def check_record(record, where: str) -> dict:
+    """`record` if it has the fields replaying and drawing it need, else a ValueError naming
+    `where` and the field (the states' contents are checked where they are loaded)."""
+    if not isinstance(record, dict):
+        raise ValueError(f"{where}: a game record must be a JSON object, got "
+                         f"{type(record).__name__}")
+    for key, kind in (("initial_state", dict), ("steps", list)):
+        if key not in record:
+            raise ValueError(f"{where}: missing field {key!r}")
+        if not isinstance(record[key], kind):
+            raise ValueError(f"{where}: field {key!r} must be a JSON {kind.__name__}")
+    for t, step in enumerate(record["steps"]):
+        missing = [key for key in STEP_FIELDS if not isinstance(step, dict) or key not in step]
+        if missing:
+            raise ValueError(f"{where}: steps[{t}]: missing field {missing[0]!r}")
+        if not isinstance(step["state"], dict):
+            raise ValueError(f"{where}: steps[{t}].state must be a JSON object")
+    return record
+
+
+def _numbered(path: str | Path) -> Iterator[tuple[int, object]]:
     path = Path(path)
     if not path.exists():
         raise ValueError(f"{path}: no such file")
-    with _open(path, "r") as f:
-        for line_no, line in enumerate(f, 1):
-            if not line.strip():
-                continue
-            try:
-                yield json.loads(line)
-            except json.JSONDecodeError as exc:
-                raise ValueError(f"{path}:{line_no}: not a JSON game record ({exc})") from None
+    line_no = 0
+    try:
+        with _open(path, "r") as f:
+            for line_no, line in enumerate(f, 1):
+                if not line.strip():
+                    continue
+                try:
+                    yield line_no, json.loads(line)
+                except json.JSONDecodeError as exc:
+                    raise ValueError(f"{path}:{line_no}: not JSON ({exc})") from None
+    except (EOFError, OSError, UnicodeDecodeError) as exc:  # a gzip cut short, or not gzip
+        raise ValueError(f"{path}: damaged or cut short after {line_no} lines ({exc})") from None
+
+
+def read_jsonl(path: str | Path) -> Iterator:
+    """Yield the JSON values of a .jsonl or .jsonl.gz file, one a line; ValueError naming the
+    file (and line) for a missing file, one cut short or damaged, or a line that is not JSON."""
+    return (value for _, value in _numbered(path))
+
+
+def read_games(path: str | Path) -> Iterator[dict]:
+    """Yield the game records of a .jsonl or .jsonl.gz file, one at a time, each checked by
+    `check_record` (errors name the file and line)."""
+    for line_no, record in _numbered(path):
+        yield check_record(record, f"{path}:{line_no}")
 
 
 def write_games(path: str | Path, records: Iterable[dict]) -> int:

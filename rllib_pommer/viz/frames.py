@@ -15,6 +15,7 @@ import numpy as np
 from ..game.constants import NUM_AGENTS
 from ..game.engine import Game
 from ..game.records import config_of, read_games
+from ..game.serialize import load_state
 
 
 @dataclass(frozen=True)
@@ -29,10 +30,16 @@ class Frame:
 
 
 def load_game(path: str | Path, index: int = 0) -> dict:
-    """Game `index` (from 0) of a .jsonl[.gz] file of game records."""
+    """Game `index` (from 0) of a .jsonl[.gz] file of game records, its every state checked as
+    the engine checks a state it loads (board size, item codes, fields)."""
     count = 0
     for count, record in enumerate(read_games(path), 1):
         if count - 1 == index:
+            for step, state in enumerate(game_states(record)):
+                try:
+                    load_state(state)
+                except ValueError as exc:
+                    raise ValueError(f"{path}: game {index}, step {step}: {exc}") from None
             return record
     raise ValueError(f"{path}: no game {index}; the file holds {count} game(s)")
 
