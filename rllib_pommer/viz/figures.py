@@ -25,9 +25,10 @@ OUTCOMES = (("win", 0, "#2e9e4f"), ("tie", 2, "#9a9a9a"), ("loss", 1, "#d43434")
 Rates = dict[str, dict[str, tuple[float, float, float]]]  # opponent -> variant -> cell
 
 
-# Reward kind -> the axis' name; one axis each, so shaped and raw returns are never compared on
-# one scale. "" is a run that did not log its kind.
-REWARD_AXES = {"shaped": "shaped", "raw": "raw (game outcome only)", "": "kind not logged"}
+# Reward kind -> its axis' title; one axis each, so shaped and raw returns are never compared on
+# one scale ("" : a run that did not log its kind). The rewards themselves: envs/team.py.
+REWARD_AXES = {"shaped": "shaped reward (the paper's)", "raw": "raw reward (the engine's)",
+               "": "reward kind not logged"}
 
 
 def plot_training(curves: list[TrainingCurve], out: Path) -> Figure:
@@ -56,7 +57,7 @@ def plot_training(curves: list[TrainingCurve], out: Path) -> Figure:
                             va="top", fontsize=8, color=colour,
                             xycoords=("data", "axes fraction"))
     for kind, ax in axes.items():
-        ax.set_title(f"{REWARD_AXES[kind]} reward", fontsize=10)
+        ax.set_title(REWARD_AXES[kind], fontsize=10)
         ax.set_ylabel(f"learner's return: {WINDOW:,}-episode\nmean of RLlib's "
                       f"{RLLIB_WINDOW}-episode means")
         ax.grid(alpha=0.3)
