@@ -37,6 +37,27 @@ WEIGHTS_FILE = "pi.pt"
 METRICS_FILE = "metrics.json"
 
 
+def _whole(low: int):
+    return lambda v: isinstance(v, int) and not isinstance(v, bool) and v >= low
+
+
+# The settings with a range (None, where a field allows it, means no limit): test, what is allowed.
+_ALLOWED = {
+    "epochs": (_whole(1), "an integer >= 1"),
+    "batch_size": (_whole(1), "an integer >= 1"),
+    "threads": (_whole(1), "an integer >= 1"),
+    "checkpoint_every": (_whole(1), "an integer >= 1"),
+    "max_batches_per_epoch": (_whole(1), "an integer >= 1"),
+    "max_val_batches": (_whole(1), "an integer >= 1"),
+    "max_label_draws": (_whole(0), "an integer >= 0"),
+    "lr": (lambda v: 0 < v < math.inf, "a positive number"),
+    "final_lr_fraction": (lambda v: 0 <= v <= 1, "in [0, 1]"),
+    "dropout": (lambda v: 0 <= v < 1, "in [0, 1)"),
+    # Whole games go to validation: none would leave nothing to measure, all nothing to train.
+    "val_fraction": (lambda v: 0 < v < 1, "in (0, 1)"),
+}
+
+
 @dataclass
 class BCConfig:
     """Every setting of a behaviour-cloning run; `python -m rllib_pommer.imitate` makes one
@@ -70,6 +91,10 @@ class BCConfig:
         if isinstance(self.data, (str, Path)):
             self.data = [self.data]
         self.data = [Path(d) for d in self.data]
+        for name, (allowed, what) in _ALLOWED.items():
+            value = getattr(self, name)
+            if value is not None and not allowed(value):
+                raise ValueError(f"{name} must be {what}, got {value!r}")
 
     @property
     def training_dir(self) -> Path:
@@ -212,6 +237,10 @@ def train(cfg: BCConfig) -> dict:
     set_cpu_options(cfg.threads)
     torch.manual_seed(cfg.seed)
     train_data, val_data = open_dataset(*cfg.data).split(cfg.val_fraction, cfg.seed)
+    for side, data in (("training", train_data), ("validation", val_data)):
+        if data.num_samples == 0:
+            raise ValueError(f"val_fraction {cfg.val_fraction} leaves no {side} games in "
+                             f"{', '.join(map(str, cfg.data))}: choose another, or more games")
     cfg.training_dir.mkdir(parents=True, exist_ok=True)
     net = build_net(cfg)
     optimizer = torch.optim.Adam(net.parameters(), lr=cfg.lr)

@@ -22,12 +22,16 @@ from pathlib import Path
 from tqdm import tqdm
 
 from .data.collector import SHARD_GAMES, Collection, Dagger, ShardResult
+from .outputs import check_output_dir
 
 
 def _positive(text: str) -> int:
-    value = int(text)
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
     if value <= 0:
-        raise argparse.ArgumentTypeError(f"must be a positive number, got {value}")
+        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text!r}")
     return value
 
 
@@ -52,6 +56,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     dagger = Dagger(args.dagger, tuple(args.vs.split(","))) if args.dagger else None
     try:
+        check_output_dir(args.out, "--out")
         collection = Collection(args.out, args.games, args.seed, args.shard_games,
                                 args.label_draws, dagger)
     except ValueError as exc:

@@ -16,14 +16,22 @@ import typing
 from pathlib import Path
 
 from .bc import WEIGHTS_FILE, BCConfig, train
+from .outputs import check_output_dir
+
+
+def _toml_string(text: str) -> str:
+    """A TOML basic string: JSON's escapes are TOML's (non-ASCII kept as is, since TOML refuses
+    the surrogate pairs JSON would write for it)."""
+    return json.dumps(text, ensure_ascii=False)
 
 
 def write_policy_file(out: Path, description: str) -> Path:
     policy = out.parent / f"{out.name}.toml"
     # greedy: a clone plays SimpleAgent's most likely action (sampling won 0.165 of 200 games
     # against SimpleAgent, greedy play 0.290, with v1's first-epoch weights)
-    policy.write_text(f'kind = "learned"\nweights = "{out.name}/{WEIGHTS_FILE}"\n'
-                      f'greedy = true\ndescription = {json.dumps(description)}\n')
+    policy.write_text(f'kind = "learned"\nweights = {_toml_string(f"{out.name}/{WEIGHTS_FILE}")}\n'
+                      f'greedy = true\ndescription = {_toml_string(description)}\n',
+                      encoding="utf-8")
     return policy
 
 
@@ -62,8 +70,9 @@ def main(argv: list[str] | None = None) -> int:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     _options(parser)
     args = parser.parse_args(argv)
-    cfg = BCConfig(**vars(args))
     try:
+        cfg = BCConfig(**vars(args))
+        check_output_dir(args.out, "--out")
         metrics = train(cfg)
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)

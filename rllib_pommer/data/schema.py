@@ -220,4 +220,8 @@ def read_meta(path: Path) -> tuple[pq.ParquetFile, ShardMeta]:
     missing = [name for name in required if name not in shard.schema_arrow.names]
     if missing or SHARD_KEY not in metadata:
         raise ValueError(f"{path}: malformed shard (missing {missing or SHARD_KEY.decode()})")
-    return shard, ShardMeta(**json.loads(metadata[SHARD_KEY]))
+    try:
+        return shard, ShardMeta(**json.loads(metadata[SHARD_KEY]))
+    except (ValueError, TypeError) as exc:  # not JSON, not an object, or other keys
+        raise ValueError(f"{path}: malformed shard metadata {SHARD_KEY.decode()!r} "
+                         f"({exc})") from None
