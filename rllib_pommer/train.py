@@ -44,6 +44,7 @@ def main(argv: list[str] | None = None) -> int:
     # Imports after parsing, so --help is instant.
     import ray
 
+    from .rl import ray_session
     from .rl.config import check_pi_weights
     from .rl.curriculum import load_curriculum
     from .rl.training import RayStartError, check_run_dir, init_ray, resumes_from_checkpoint, train
@@ -53,10 +54,16 @@ def main(argv: list[str] | None = None) -> int:
             raise ValueError(f"--num-env-runners must be 0 or more, got {args.num_env_runners}")
         curriculum = load_curriculum(args.curriculum)
         out = args.out or Path("runs") / curriculum.name
+        ended = ray_session.reap(out)  # what a SIGKILLed run in `out` left running
+        if ended:
+            print(f"ended {len(ended)} Ray processes left by the killed run in {out}",
+                  file=sys.stderr)
         check_run_dir(out, args.resume)
         if not resumes_from_checkpoint(out, args.resume):  # else pi comes from the checkpoint
             check_pi_weights(Path(args.pi_weights) if args.pi_weights else curriculum.pi_weights)
         init_ray(args.address)
+        if args.address is None:  # our own Ray: note it, for the next start to clean up after
+            ray_session.record(out)
     except ValueError as exc:
         parser.error(str(exc))
     except RayStartError as exc:  # not the user's input: one line and exit 1, no traceback

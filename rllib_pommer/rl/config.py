@@ -35,6 +35,7 @@ from ray.rllib.algorithms.ppo import PPOConfig
 from ray.rllib.core.rl_module.multi_rl_module import MultiRLModuleSpec
 from ray.rllib.core.rl_module.rl_module import RLModuleSpec
 
+from ..learned import load_policy_net
 from .callbacks import CurriculumCallback
 from .connectors import LearnerFilters
 from .curriculum import Curriculum
@@ -50,10 +51,13 @@ def _learner_filters(env=None, spaces=None, device=None):
 
 
 def check_pi_weights(path: Path) -> Path:
+    """The weights file, resolved, once it has loaded into a PommerNet: a missing, cut short or
+    foreign file is named here, before Ray starts, not deep inside a Ray actor."""
     if not Path(path).is_file():
         raise ValueError(
             f"imitation weights not found: {path} (train them with `python -m "
             f"rllib_pommer.imitate`, set pi_weights in the curriculum file, or pass --pi-weights)")
+    load_policy_net(path)
     return Path(path).resolve()
 
 

@@ -1,10 +1,13 @@
-"""`python -m rllib_pommer.train --resume` continues a SIGKILLed run with stage and counters, and
-keeps the checkpoint at the warm-up's end."""
+"""`python -m rllib_pommer.train --resume` continues a SIGKILLed run with stage and counters (or
+refuses a broken state, never starting over), cleans up after it, and keeps the checkpoint at
+the warm-up's end."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -15,6 +18,7 @@ from pathlib import Path
 import torch
 
 from rllib_pommer.learned import load_policy_net
+from rllib_pommer.rl import ray_session
 from rllib_pommer.rl.checkpoint_policy import load_checkpoint_net
 from rllib_pommer.viz.training import read_rows
 
@@ -33,6 +37,10 @@ def _results(out):
 
 
 def test_resume_after_sigkill(tmp_path, pi_weights):
+    """SIGKILL the driver alone (as the OOM killer does): Ray's agents outlive it, and the
+    experiment state may be left empty. The next start ends those orphans (and nothing else);
+    `--resume` refuses the empty state with one line and exit 2 instead of starting over; with
+    the state back it continues from the checkpoint."""
     out = tmp_path / "run"
     process = subprocess.Popen(_train(out, pi_weights), cwd=REPO, stdout=subprocess.DEVNULL,
                                stderr=subprocess.DEVNULL, start_new_session=True)
@@ -43,15 +51,34 @@ def test_resume_after_sigkill(tmp_path, pi_weights):
             time.sleep(0.2)
         time.sleep(1.0)  # let Tune write the experiment state that names the checkpoint
         assert process.poll() is None, "training ended before it could be killed"
-    finally:
-        os.killpg(process.pid, signal.SIGKILL)  # the run and the Ray it started, nothing else
+        process.kill()
         process.wait()
-    # checkpoint_00000k is written after iteration k + 1; Tune's result files of the killed run
-    # may never have left its staging area, so the checkpoints are what survived.
-    checkpointed = len(list(out.glob("*/checkpoint_*")))
-    assert checkpointed >= 1
-    finished = subprocess.run(_train(out, pi_weights, "--resume"), cwd=REPO,
-                              capture_output=True, text=True, timeout=300)
+        session_dir = json.loads((out / ray_session.SESSION_FILE).read_text())["session_dir"]
+        time.sleep(2.0)  # Ray's processes tied to the driver die with it
+        orphans = ray_session.session_processes(session_dir)
+        # checkpoint_00000k is written after iteration k + 1; Tune's result files of the killed
+        # run may never have left its staging area, so the checkpoints are what survived.
+        checkpointed = len(list(out.glob("*/checkpoint_*")))
+        assert checkpointed >= 1
+        (state,) = out.glob("basic-variant-state-*.json")
+        intact = state.read_bytes()
+        state.write_bytes(b"")  # as a kill can leave it: Tune would start the run over
+        refused = subprocess.run(_train(out, pi_weights, "--resume"), cwd=REPO,
+                                 capture_output=True, text=True, timeout=120)
+        assert refused.returncode == 2, refused.stderr[-2000:]
+        assert f"{state.name} is unreadable (empty)" in refused.stderr
+        assert "Traceback" not in refused.stderr
+        assert ray_session.session_processes(session_dir) == []
+        if orphans:  # Ray 2.60 leaves its dashboard and runtime-env agents (others may still
+            # have been dying when they were listed)
+            assert re.search(r"ended [1-9]\d* Ray processes left by the killed run",
+                             refused.stderr)
+        state.write_bytes(intact)
+        finished = subprocess.run(_train(out, pi_weights, "--resume"), cwd=REPO,
+                                  capture_output=True, text=True, timeout=300)
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(process.pid, signal.SIGKILL)  # whatever of the killed run's group is left
     assert finished.returncode == 0, finished.stderr[-2000:]
     results = _results(out)
     resumed = [r for r in results if r["iterations_since_restore"] < r["training_iteration"]]

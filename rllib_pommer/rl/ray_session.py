@@ -1,0 +1,86 @@
+"""The local Ray instance a training run started, noted in its run folder, so that the next start
+in that folder ends what a SIGKILLed run left running, and nothing else.
+
+When the driver of a local Ray is SIGKILLed, GCS, raylet and workers die with it (Ray ties them to
+the driver's life), but Ray 2.60's dashboard and runtime-env agents live on, orphaned, one pair per
+kill. `record` writes the session folder and the driver's pid and start time to
+`<run>/ray_session.json`; `reap`, before the next start in that folder, ends the processes of
+that session once its driver is gone. A process belongs to the session if it holds a file open
+in the session folder (every Ray process keeps its logs there), so other Ray instances on the
+machine (another run, a long campaign) are never touched. A driver that is still alive means the
+run is still going: a second start in its folder is refused.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import signal
+from pathlib import Path
+
+SESSION_FILE = "ray_session.json"
+PROC = Path("/proc")
+
+
+def _start_time(pid: int) -> str | None:
+    """The process's start time in clock ticks since boot (tells a pid's reuse apart), or None
+    if there is no such process."""
+    try:
+        stat = (PROC / str(pid) / "stat").read_text()
+    except OSError:
+        return None
+    return stat.rsplit(")", 1)[1].split()[19]  # field 22, counted after the command name
+
+
+def record(run_dir: Path) -> None:
+    """Note the local Ray instance this process started in `run_dir` (made if missing)."""
+    import ray
+
+    session_dir = ray._private.worker._global_node.get_session_dir_path()  # not in the public API
+    run_dir = Path(run_dir)
+    run_dir.mkdir(parents=True, exist_ok=True)
+    note = {"session_dir": session_dir, "driver_pid": os.getpid(),
+            "driver_start": _start_time(os.getpid())}
+    temp = run_dir / f".{SESSION_FILE}.tmp"
+    temp.write_text(json.dumps(note))
+    os.replace(temp, run_dir / SESSION_FILE)
+
+
+def session_processes(session_dir: str) -> list[int]:
+    """The pids of processes (other than this one) with a file open in `session_dir`."""
+    prefix = session_dir.rstrip("/") + "/"
+    found = []
+    for entry in PROC.iterdir():
+        if not entry.name.isdigit() or int(entry.name) == os.getpid():
+            continue
+        try:
+            targets = [os.readlink(fd) for fd in (entry / "fd").iterdir()]
+        except OSError:  # gone meanwhile, or not ours to inspect
+            continue
+        if any(target.startswith(prefix) for target in targets):
+            found.append(int(entry.name))
+    return sorted(found)
+
+
+def reap(run_dir: Path) -> list[int]:
+    """End the Ray processes left by the run last started in `run_dir` if its driver is gone;
+    returns their pids. ValueError if that driver is still running."""
+    path = Path(run_dir) / SESSION_FILE
+    try:
+        note = json.loads(path.read_text())
+        session_dir, pid, started = note["session_dir"], note["driver_pid"], note["driver_start"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return []  # no note (a new run, or one on a cluster)
+    if not (isinstance(session_dir, str) and os.path.isabs(session_dir)
+            and Path(session_dir).name.startswith("session_")):
+        return []  # not a Ray session folder: nothing here is safe to end
+    if started is not None and _start_time(pid) == started:
+        raise ValueError(f"{Path(run_dir).resolve()}: a run (pid {pid}) is still training in "
+                         f"this folder; stop it first")
+    orphans = session_processes(session_dir)
+    for orphan in orphans:
+        with contextlib.suppress(ProcessLookupError, PermissionError):  # gone, or not ours
+            os.kill(orphan, signal.SIGKILL)
+    path.unlink()
+    return orphans

@@ -1,0 +1,221 @@
+"""Bad input to the commands, as a careless user or a damaged disk gives it: each case ends in
+exit code 2 and one line naming what was wrong (file, field, flag, value), never a traceback or
+a silent success. (The HTTP server's 400s, policy files, curricula and checkpoints have their
+own tables in tests/serving, tests/agents and tests/rl.)"""
+
+from __future__ import annotations
+
+import gzip
+import json
+import sys
+import tracemalloc
+from pathlib import Path
+
+import pyarrow.parquet as pq
+import pytest
+import tomllib
+
+from rllib_pommer import collect, imitate, replay, serve
+from rllib_pommer.data.collector import Collection
+from rllib_pommer.data.schema import SHARD_KEY
+from rllib_pommer.game.records import write_games
+
+from .conftest import PUBLIC_GAMES
+
+
+@pytest.fixture(scope="module")
+def record() -> dict:
+    with gzip.open(PUBLIC_GAMES, "rt") as f:
+        return json.loads(f.readline())
+
+
+@pytest.fixture(scope="module")
+def shards(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("shards")
+    Collection(out, 2, 0, 1).run(workers=1)
+    return out
+
+
+def _record_file(tmp: Path, record: dict, change) -> Path:
+    bad = json.loads(json.dumps(record))
+    change(bad)
+    path = tmp / "games.jsonl"
+    write_games(path, [bad])
+    return path
+
+
+def _cut_gzip(tmp: Path, record: dict) -> Path:
+    path = tmp / "games.jsonl.gz"
+    write_games(path, [record])
+    path.write_bytes(path.read_bytes()[:2000])
+    return path
+
+
+def _board_12x12(record: dict) -> None:
+    for state in [record["initial_state"]] + [s["state"] for s in record["steps"]]:
+        state["board"] = [row + [0] for row in state["board"]] + [[0] * 12]
+
+
+def _empty(tmp: Path, record: dict) -> Path:
+    path = tmp / "empty.jsonl"
+    path.write_text("")
+    return path
+
+
+def _retagged_shards(tmp: Path, shards: Path, metadata: bytes) -> Path:
+    """A copy of the shards whose first one carries other metadata under the shard key."""
+    out = tmp / "retagged"
+    out.mkdir()
+    for shard in sorted(shards.iterdir()):
+        table = pq.read_table(shard)
+        if shard.name.endswith("000000.parquet"):
+            table = table.replace_schema_metadata({**table.schema.metadata, SHARD_KEY: metadata})
+        pq.write_table(table, out / shard.name)
+    return out
+
+
+def _a_file(tmp: Path) -> Path:
+    path = tmp / "a_file"
+    path.write_text("")
+    return path
+
+
+def _cut_weights(tmp: Path) -> Path:
+    import torch
+
+    from rllib_pommer.network import PommerNet
+
+    path = tmp / "pi.pt"
+    torch.save(PommerNet().state_dict(), path)
+    path.write_bytes(path.read_bytes()[:1000])
+    return path
+
+
+# (case, command, arguments made from (tmp folder, a reference record, tiny shards), message)
+CASES = [
+    ("truncated gzip replay", replay, lambda t, r, s: ["verify", str(_cut_gzip(t, r))],
+     "games.jsonl.gz: damaged or cut short after"),
+    ("record without initial_state", replay,
+     lambda t, r, s: ["verify", str(_record_file(t, r, lambda g: g.pop("initial_state")))],
+     "games.jsonl:1: missing field 'initial_state'"),
+    ("step without state", replay,
+     lambda t, r, s: ["verify", str(_record_file(t, r, lambda g: g["steps"][3].pop("state")))],
+     "games.jsonl:1: steps[3]: missing field 'state'"),
+    ("state without step_count", replay,
+     lambda t, r, s: ["render", str(_record_file(
+         t, r, lambda g: g["steps"][2]["state"].pop("step_count"))), "--out", str(t / "x.png")],
+     "game 0, step 3: state: missing field 'step_count'"),
+    ("unknown item code, render", replay,
+     lambda t, r, s: ["render", str(_record_file(
+         t, r, lambda g: g["steps"][4]["state"]["board"][0].__setitem__(0, 42))),
+         "--out", str(t / "x.gif")],
+     "game 0, step 5: state.board: unknown item code 42 at [0, 0]"),
+    ("unknown item code, html", replay,
+     lambda t, r, s: ["html", str(_record_file(
+         t, r, lambda g: g["initial_state"]["board"][3].__setitem__(1, 99))),
+         "--out", str(t / "x.html")],
+     "game 0, step 0: state.board: unknown item code 99 at [3, 1]"),
+    ("12x12 board", replay,
+     lambda t, r, s: ["render", str(_record_file(t, r, _board_12x12)), "--out", str(t / "x.png")],
+     "expected shape (11, 11), got (12, 12)"),
+    ("--fps 0", replay,
+     lambda t, r, s: ["render", str(_record_file(t, r, lambda g: None)), "--out",
+                      str(t / "x.gif"), "--fps", "0"],
+     "--fps: must be in (0, 100] steps per second, got 0"),
+    ("empty replay file", replay, lambda t, r, s: ["verify", str(_empty(t, r))],
+     "empty.jsonl: no game records: nothing to verify"),
+    ("collect --out a file", collect,
+     lambda t, r, s: ["--games", "1", "--out", str(_a_file(t)), "--workers", "1"],
+     "a_file is a file, not a folder"),
+    ("collect --out under a file", collect,
+     lambda t, r, s: ["--games", "1", "--out", str(_a_file(t) / "data"), "--workers", "1"],
+     "a_file is a file, not a folder"),
+    ("collect --games 1e9", collect, lambda t, r, s: ["--games", "1e9", "--out", str(t)],
+     "--games: must be a positive integer, got '1e9'"),
+    ("shard metadata with other keys", imitate,
+     lambda t, r, s: ["--data", str(_retagged_shards(t, s, b'{"seed": 0, "colour": "red"}')),
+                      "--out", str(t / "p")],
+     "shard-000000.parquet: malformed shard metadata"),
+    ("shard metadata not JSON", imitate,
+     lambda t, r, s: ["--data", str(_retagged_shards(t, s, b"{seed")), "--out", str(t / "p")],
+     "shard-000000.parquet: malformed shard metadata"),
+    ("imitate --batch-size 0", imitate,
+     lambda t, r, s: ["--data", str(s), "--out", str(t / "p"), "--batch-size", "0"],
+     "batch_size must be an integer >= 1, got 0"),
+    ("imitate --threads 0", imitate,
+     lambda t, r, s: ["--data", str(s), "--out", str(t / "p"), "--threads", "0"],
+     "threads must be an integer >= 1, got 0"),
+    ("imitate --checkpoint-every 0", imitate,
+     lambda t, r, s: ["--data", str(s), "--out", str(t / "p"), "--checkpoint-every", "0"],
+     "checkpoint_every must be an integer >= 1, got 0"),
+    ("imitate --epochs 0", imitate,
+     lambda t, r, s: ["--data", str(s), "--out", str(t / "p"), "--epochs", "0"],
+     "epochs must be an integer >= 1, got 0"),
+    ("imitate --val-fraction 1", imitate,
+     lambda t, r, s: ["--data", str(s), "--out", str(t / "p"), "--val-fraction", "1"],
+     "val_fraction must be in (0, 1), got 1.0"),
+    ("imitate --val-fraction 0", imitate,
+     lambda t, r, s: ["--data", str(s), "--out", str(t / "p"), "--val-fraction", "0"],
+     "val_fraction must be in (0, 1), got 0.0"),
+    ("imitate --val-fraction leaving no training games", imitate,
+     lambda t, r, s: ["--data", str(s), "--out", str(t / "p"), "--val-fraction", "0.999999"],
+     "val_fraction 0.999999 leaves no training games"),
+    ("imitate --out under a file", imitate,
+     lambda t, r, s: ["--data", str(s), "--out", str(_a_file(t) / "p")],
+     "a_file is a file, not a folder"),
+    ("serve --port 70000", serve, lambda t, r, s: ["--policy", "static", "--port", "70000"],
+     "--port must be in 0..65535, got 70000"),
+]
+
+
+@pytest.mark.parametrize("command, make_args, message",
+                         [pytest.param(*case[1:], id=case[0]) for case in CASES])
+def test_bad_input_is_one_line_and_exit_2(command, make_args, message, tmp_path, record, shards,
+                                          capsys):
+    try:
+        code = command.main(make_args(tmp_path, record, shards))
+    except SystemExit as exc:  # argparse refuses bad values itself, also with exit code 2
+        code = exc.code
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert message in err
+    error_lines = [line for line in err.splitlines() if "error:" in line]
+    assert len(error_lines) == 1 and message in error_lines[0], err
+    assert "Traceback" not in err
+
+
+def test_a_cut_short_pi_weights_file_is_refused_before_ray_leaving_no_run_folder(tmp_path):
+    """Before, the run died deep inside a Ray actor and its half-made run folder then blocked
+    the same --out."""
+    import subprocess
+
+    out = tmp_path / "run"
+    done = subprocess.run([sys.executable, "-m", "rllib_pommer.train", "--curriculum", "smoke",
+                           "--out", str(out), "--pi-weights", str(_cut_weights(tmp_path))],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2
+    assert "pi.pt: not a readable weights file" in done.stderr
+    assert "Traceback" not in done.stderr and not out.exists()
+
+
+def test_policy_files_for_names_with_quotes_stay_valid_toml(tmp_path):
+    out = tmp_path / "policies" / 'clone "b\\2" \U0001f600\t'
+    out.parent.mkdir()
+    data_names = 'data "v2" \\ tab\t é'
+    policy = imitate.write_policy_file(out, f"Behaviour cloning of SimpleAgent ({data_names})")
+    written = tomllib.loads(policy.read_text(encoding="utf-8"))
+    assert written["weights"] == f"{out.name}/pi.pt"
+    assert written["description"] == f"Behaviour cloning of SimpleAgent ({data_names})"
+
+
+def test_planning_a_billion_games_costs_nothing_up_front(tmp_path):
+    """Shards are planned on demand: asking for 10^9 games holds no list of them."""
+    tracemalloc.start()
+    try:
+        collection = Collection(tmp_path / "huge", 10**9, 0)
+        first = next(collection._missing())
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert first == 0 and len(collection.plan) == -(-10**9 // collection.plan.template.shard_games)
+    assert peak < 1_000_000
