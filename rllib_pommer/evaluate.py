@@ -5,9 +5,12 @@ and half on {1, 3} (`--fixed-seats`: always {0, 2}), and prints A's win/loss/tie
 Wilson intervals, the mean game length and A's agents lost to their own bombs. `--records FILE`
 writes one row per game (.jsonl or .csv) with the columns
 
-    game, seed, seats_a, result (win/loss/tie for A), length, died, own_bomb_deaths, bombs_laid
+    game, seed, seats_a, result (win/loss/tie for A), length, died, own_bomb_deaths, bombs_laid,
+    team, vs, filters
 
-(the last three by seat 0..3), from which every table can be recomputed. Same seed, same records.
+(died, own_bomb_deaths and bombs_laid by seat 0..3; the last three name the match, so
+`python -m rllib_pommer.report` reads the file alone), from which every table can be recomputed.
+Same seed, same records.
 `--record K` also writes the first K games as replays in the reference's JSON Lines schema
 (`--replays FILE`, with every agent's observations if `--with-observations`), for
 `python -m rllib_pommer.replay render|html|verify`.
