@@ -5,8 +5,9 @@ from __future__ import annotations
 import asyncio
 import json
 import threading
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import ExitStack, contextmanager
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -73,3 +74,9 @@ def team_observations(seat: int, steps: int, seed: int = 3) -> list[Observation]
 def obs_text(obs: Observation) -> str:
     """The observation as the runner's /action sends it."""
     return json.dumps(dump_observation(obs))
+
+
+def games_played(records: Sequence) -> list:
+    """Match records without the names of the policies (a served policy is named by its
+    `remote.toml`): what was played, to compare with the same match played in process."""
+    return [replace(record, team="", vs="") for record in records]
