@@ -4,7 +4,8 @@ The measures behind `python -m rllib_pommer.bench learn` that need torch but not
 
 * `plain_ppo_samples_per_s`: PPO's update as plain eager float32 NCHW torch, the network as it
   stood before any speed work: pi and a separate vf (`PommerNet`), a clipped surrogate plus value
-  loss, minibatches of 128, Adam, gradient clip. The baseline the RLlib learner is compared to.
+  loss, Adam, gradient clip, with the real learner's minibatch, clip, lr and gradient clip
+  (`rl/settings.PPOSettings`, free of Ray). The baseline the RLlib learner is compared to.
 * `bc_samples_per_s`: the real behaviour-cloning step (`bc.train_step` with `BCConfig`'s speed
   settings), beside `plain_bc_samples_per_s`, the same step with those settings off.
 * `flop_bound`: FLOPs per trained sample counted by torch's `FlopCounterMode` (forward and
@@ -33,9 +34,9 @@ from .features import NUM_PLANES
 from .game.constants import NUM_ACTIONS
 from .game.observation import empty_observations
 from .network import PommerNet
+from .rl.settings import PPOSettings
 
-PPO_MINIBATCH = 128  # the paper's
-CLIP = 0.01  # the paper's
+PPO = PPOSettings()
 BC_BATCH = 512
 
 
@@ -63,24 +64,25 @@ def _ppo_minibatch_step(pi: PommerNet, vf: PommerNet, optimizer: torch.optim.Opt
     old_logp, advantages, targets = torch.zeros(rows) - 1.8, torch.randn(rows), torch.randn(rows)
     logp = torch.log_softmax(pi(planes), -1).gather(1, actions[:, None]).squeeze(1)
     ratio = torch.exp(logp - old_logp)
-    surrogate = torch.min(ratio * advantages, ratio.clamp(1 - CLIP, 1 + CLIP) * advantages)
+    clipped = ratio.clamp(1 - PPO.clip_param, 1 + PPO.clip_param)
+    surrogate = torch.min(ratio * advantages, clipped * advantages)
     loss = -surrogate.mean() + F.mse_loss(vf(planes).squeeze(-1), targets)
     optimizer.zero_grad()
     loss.backward()
-    torch.nn.utils.clip_grad_norm_([*pi.parameters(), *vf.parameters()], 10.0)
+    torch.nn.utils.clip_grad_norm_([*pi.parameters(), *vf.parameters()], PPO.grad_clip)
     optimizer.step()
     return rows
 
 
 def plain_ppo_samples_per_s(seconds: float = 5.0) -> float:
     pi, vf = PommerNet(), PommerNet(num_outputs=1)
-    optimizer = torch.optim.Adam([*pi.parameters(), *vf.parameters()], lr=1e-4)
-    pool = sparse_planes(16 * PPO_MINIBATCH)
+    optimizer = torch.optim.Adam([*pi.parameters(), *vf.parameters()], lr=PPO.lr)
+    pool = sparse_planes(16 * PPO.minibatch_size)
     offsets = iter(range(10**9))
 
     def step() -> int:
-        start = next(offsets) % 16 * PPO_MINIBATCH
-        return _ppo_minibatch_step(pi, vf, optimizer, pool[start:start + PPO_MINIBATCH])
+        start = next(offsets) % 16 * PPO.minibatch_size
+        return _ppo_minibatch_step(pi, vf, optimizer, pool[start:start + PPO.minibatch_size])
 
     return _rate(step, seconds)
 
@@ -121,12 +123,12 @@ def flops_per_sample(num_outputs: int = NUM_ACTIONS, backward: bool = True) -> i
     """FLOPs of one sample through `PommerNet` (forward, plus backward if asked), as torch's
     `FlopCounterMode` counts them."""
     net = PommerNet(num_outputs=num_outputs)
-    planes = sparse_planes(PPO_MINIBATCH)
+    planes = sparse_planes(PPO.minibatch_size)
     with FlopCounterMode(display=False) as counter:
         out = net(planes).sum()
         if backward:
             out.backward()
-    return counter.get_total_flops() // PPO_MINIBATCH
+    return counter.get_total_flops() // PPO.minibatch_size
 
 
 def float32_peak_flops(seconds: float = 2.0, size: int = 1024) -> float:

@@ -1,8 +1,8 @@
 """The PPOConfig of a curriculum: env, modules, mapping, connectors, callback and PPO settings.
 
 Paper settings (fixed): entropy coefficient 0, clip 0.01, minibatch 128, no dropout.
-Others (our choices, overridable in a curriculum's [ppo] table, defaults in
-`curriculum.PPO_OPTIONS`): lr 1e-4 (small, to stay near the imitation policy); gamma 0.999,
+Others (our choices, overridable in a curriculum's [ppo] table; every value with its default in
+`settings.PPOSettings`): lr 1e-4 (small, to stay near the imitation policy); gamma 0.999,
 because every outcome is paid at the end and with 0.99 a tie's -1 some 400 steps away is worth
 -0.02 now, so waiting out the clock beats any risky attack (measured: the quick curriculum at 0.99
 and lr 3e-4 ended with every training game tied); GAE lambda 0.95; 4 epochs over batches of 4,000
@@ -81,7 +81,7 @@ def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None
             "action_filter": first.action_filter, "jitter": first.jitter})
         .env_runners(
             num_env_runners=num_env_runners,
-            num_envs_per_env_runner=ppo["num_envs_per_env_runner"],
+            num_envs_per_env_runner=ppo.num_envs_per_env_runner,
             module_to_env_connector=_learner_filters,
             rollout_fragment_length="auto",
             episodes_to_numpy=False)
@@ -91,10 +91,11 @@ def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None
             policies_to_train=[LEARNER])
         .rl_module(rl_module_spec=MultiRLModuleSpec(rl_module_specs=modules))
         .training(
-            entropy_coeff=0.0, clip_param=0.01, minibatch_size=128,
-            lr=ppo["lr"], gamma=ppo["gamma"], lambda_=ppo["lambda"],
-            num_epochs=ppo["num_epochs"], train_batch_size_per_learner=ppo["train_batch_size"],
-            vf_loss_coeff=ppo["vf_loss_coeff"], use_kl_loss=False, grad_clip=10.0)
+            entropy_coeff=ppo.entropy_coeff, clip_param=ppo.clip_param,
+            minibatch_size=ppo.minibatch_size, lr=ppo.lr, gamma=ppo.gamma, lambda_=ppo.lambda_,
+            num_epochs=ppo.num_epochs, train_batch_size_per_learner=ppo.train_batch_size,
+            vf_loss_coeff=ppo.vf_loss_coeff, use_kl_loss=ppo.use_kl_loss,
+            grad_clip=ppo.grad_clip)
         .learners(learner_class=PommerPPOLearner)
         .callbacks(partial(CurriculumCallback, curriculum))
         .debugging(seed=seed)

@@ -32,6 +32,7 @@ from typing import Any
 from ..agents.registry import policies_dir, policy_names, resolve_policy
 from ..shipped import data_dir
 from .env import REWARD_MODES
+from .settings import PPOSettings
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -40,17 +41,6 @@ else:  # pragma: no cover
 
 SCRIPTED_KINDS = ("static", "random", "simple", "simple_nobomb", "smart_random", "suicide")
 NET_KINDS = ("learned", "rllib_checkpoint")
-# PPO options a file may set (the paper fixes entropy 0, clip 0.01 and minibatch 128).
-PPO_OPTIONS = {
-    "lr": 1e-4,
-    "gamma": 0.999,
-    "lambda": 0.95,
-    "num_epochs": 4,
-    "train_batch_size": 4000,
-    "num_envs_per_env_runner": 8,
-    "vf_loss_coeff": 1.0,
-    "checkpoint_every": 5,
-}
 TOP_KEYS = ("name", "description", "pi_weights", "max_steps", "ppo", "defaults", "stage")
 
 
@@ -79,7 +69,7 @@ class Curriculum:
     stages: tuple[Stage, ...]
     pi_weights: Path
     max_steps: int
-    ppo: dict[str, Any]
+    ppo: PPOSettings
 
     @property
     def total_episodes(self) -> int:
@@ -143,15 +133,12 @@ def _check_type(where: str, key: str, value: Any, kind: type, positive: bool = F
         raise ValueError(f"{where}: {key} must be {wanted}, got {value!r}")
 
 
-# Each PPO option's type (from its default) and range.
-PPO_RANGES = {"lr": (0, None), "gamma": (0, 1), "lambda": (0, 1), "vf_loss_coeff": (0, None)}
-
-
 def _check_ppo(where: str, ppo: dict) -> None:
+    options = PPOSettings.options()
+    _check_keys(where, ppo, options)
     for key, value in ppo.items():
-        kind = type(PPO_OPTIONS[key])
+        kind, low, high = options[key]
         _check_type(where, key, value, kind, positive=kind is int)
-        low, high = PPO_RANGES.get(key, (None, None))
         if (low is not None and not value > low) or (high is not None and not value <= high):
             raise ValueError(f"{where}: {key} must be in ({low}, {high or 'inf'}], "
                              f"got {value!r}")
@@ -204,7 +191,6 @@ def load_curriculum(name_or_path: str | Path) -> Curriculum:
     if "max_steps" in data:
         _check_type(where, "max_steps", data["max_steps"], int, positive=True)
     ppo = data.get("ppo", {})
-    _check_keys(f"{where} [ppo]", ppo, PPO_OPTIONS)
     _check_ppo(f"{where} [ppo]", ppo)
     defaults = data.get("defaults", {})
     _check_keys(f"{where} [defaults]", defaults, set(STAGE_KEYS) - {"name", "episodes"})
@@ -220,5 +206,5 @@ def load_curriculum(name_or_path: str | Path) -> Curriculum:
         pi_weights=(path.parent / data["pi_weights"] if "pi_weights" in data
                     else policies_dir() / "imitation" / "pi.pt").resolve(),
         max_steps=data.get("max_steps", 800),
-        ppo={**PPO_OPTIONS, **ppo},
+        ppo=PPOSettings.from_options(ppo),
     )

@@ -228,7 +228,7 @@ def train(curriculum: Curriculum, out: Path, *, resume: bool = False,
                 storage_path=str(out.parent),
                 stop={STOP_KEY: curriculum.total_episodes},
                 checkpoint_config=tune.CheckpointConfig(
-                    checkpoint_frequency=curriculum.ppo["checkpoint_every"],
+                    checkpoint_frequency=curriculum.ppo.checkpoint_every,
                     checkpoint_at_end=True, num_to_keep=3),
                 callbacks=[Progress(), StageCheckpoints()],
                 verbose=0,

@@ -1,0 +1,81 @@
+"""The settings of a PPO run, typed and written once: what PPO computes, and where the run goes.
+
+Plain dataclasses that import neither Ray nor torch, so that `python -m rllib_pommer.train` builds
+its options from them before anything heavy loads (`rllib_pommer.cli_options`), a curriculum file
+is checked against them without Ray, and the plain-torch baseline of `bench learn`
+(`learn_speed.py`) measures the same minibatch and clip as the real learner.
+
+`PPOSettings` are the values `rl/config.build_config` hands RLlib; a curriculum's `[ppo]` table may
+override the fields marked as options (our choices, argued in rl/config.py), never the paper's
+(entropy 0, clip 0.01, minibatch 128). `RunSettings` are one `train` command's.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import typing
+from dataclasses import dataclass, field
+from pathlib import Path
+
+
+def _option(default, low=None, high=None, key: str | None = None):
+    """A field a curriculum's [ppo] table may set under `key` (default: the field's name), with
+    values in (low, high]; integers must be positive."""
+    return field(default=default, metadata={"option": key, "range": (low, high)})
+
+
+@dataclass(frozen=True)
+class PPOSettings:
+    """Every PPO setting of a run; the defaults are the ones campaign runs were started with."""
+
+    # Options of a curriculum's [ppo] table.
+    lr: float = _option(1e-4, low=0)
+    gamma: float = _option(0.999, low=0, high=1)
+    lambda_: float = _option(0.95, low=0, high=1, key="lambda")
+    num_epochs: int = _option(4)
+    train_batch_size: int = _option(4000)  # env steps per iteration (RLlib: per learner)
+    num_envs_per_env_runner: int = _option(8)
+    vf_loss_coeff: float = _option(1.0, low=0)
+    checkpoint_every: int = _option(5)  # iterations between Tune checkpoints
+    # Fixed: the paper's (entropy, clip, minibatch) and ours (no KL penalty, gradient clip).
+    entropy_coeff: float = 0.0
+    clip_param: float = 0.01
+    minibatch_size: int = 128
+    use_kl_loss: bool = False
+    grad_clip: float = 10.0
+
+    @classmethod
+    def options(cls) -> dict[str, tuple[type, float | None, float | None]]:
+        """{key in a [ppo] table: (type, low, high)} of every overridable field."""
+        hints = typing.get_type_hints(cls)
+        return {f.metadata["option"] or f.name: (hints[f.name], *f.metadata["range"])
+                for f in dataclasses.fields(cls) if "option" in f.metadata}
+
+    @classmethod
+    def from_options(cls, table: typing.Mapping[str, typing.Any]) -> PPOSettings:
+        """The defaults with a [ppo] table's (already checked) values in place."""
+        names = {f.metadata["option"] or f.name: f.name
+                 for f in dataclasses.fields(cls) if "option" in f.metadata}
+        return cls(**{names[key]: value for key, value in table.items()})
+
+
+@dataclass(frozen=True)
+class RunSettings:
+    """One `python -m rllib_pommer.train` run; each field is one option of the command."""
+
+    curriculum: str = "quick"
+    out: Path | None = None  # default runs/<curriculum name>
+    resume: bool = False
+    address: str | None = None  # None: a Ray instance of our own on this machine
+    pi_weights: Path | None = None  # None: the curriculum's
+    num_env_runners: int = 0  # 0: sample in the driver, right for a 2-core machine
+    seed: int = 0
+    num_cpus: int = 2  # of our own Ray instance
+    torch_threads: int = 1  # per process: batches are small, and more threads spin on 2 cores
+
+    def __post_init__(self):
+        for name, low in (("num_env_runners", 0), ("num_cpus", 1), ("torch_threads", 1)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < low:
+                raise ValueError(f"--{name.replace('_', '-')} must be {low} or more, "
+                                 f"got {value!r}")
