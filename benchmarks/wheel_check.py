@@ -87,10 +87,9 @@ def main(argv: list[str] | None = None) -> int:
               f"{shipped}")
         return 0 if inside else 1
     finally:
-        if args.venv is None and not args.keep:
-            shutil.rmtree(scratch, ignore_errors=True)
-        else:
-            shutil.rmtree(scratch / "elsewhere", ignore_errors=True)
+        keep_scratch = args.keep and args.venv is None  # the temporary venv lives in it
+        shutil.rmtree(scratch / "elsewhere" if keep_scratch else scratch, ignore_errors=True)
+        if args.keep or args.venv:
             print(f"venv kept: {venv}")
 
 
