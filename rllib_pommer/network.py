@@ -17,10 +17,10 @@ import torch
 from torch import nn
 
 from .features import NUM_PLANES
+from .game.constants import NUM_ACTIONS
 
 CHANNELS = (32, 64, 64)
 HIDDEN = 128
-NUM_ACTIONS = 6
 
 
 class PommerNet(nn.Module):

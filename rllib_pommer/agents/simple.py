@@ -18,7 +18,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from ..game.constants import NUM_ACTIONS, Action, GameType, Item
+from ..game.constants import ACTION_DC, ACTION_DR, NUM_ACTIONS, Action, GameType, Item
 from ..game.observation import Observation
 from .rng import next_below, next_u64, next_uniform, seed_states
 
@@ -32,11 +32,8 @@ PASSAGE, RIGID, WOOD, FLAMES, FOG = (
 )
 EXTRA_BOMB, INCR_RANGE, KICK = int(Item.EXTRA_BOMB), int(Item.INCR_RANGE), int(Item.KICK)
 AGENT_DUMMY, AGENT0 = int(Item.AGENT_DUMMY), int(Item.AGENT0)
-TEAM = int(GameType.TEAM)
+TEAM_GAME = int(GameType.TEAM)
 
-# Row/col step of each action code (Stop and Bomb stay).
-STEP_DR = np.array([0, -1, 1, 0, 0, 0], np.int64)
-STEP_DC = np.array([0, 0, 0, -1, 1, 0], np.int64)
 # Direction orders of the different routines (rules §8 item 17).
 NEIGHBOUR_ORDER = np.array([UP, DOWN, LEFT, RIGHT], np.int64)
 ON_BOMB_ORDER = np.array([RIGHT, LEFT, UP, DOWN], np.int64)
@@ -82,11 +79,11 @@ def _enemy_mask(agent_id: int, game_type: int) -> np.ndarray:
     """is_enemy[code] for every uint8 code, the enemies being those of `constants.enemies_of`."""
     is_enemy = np.zeros(256, np.bool_)
     for other in range(4):
-        if game_type == TEAM:
+        if game_type == TEAM_GAME:
             is_enemy[AGENT0 + other] = other % 2 != agent_id % 2
         else:
             is_enemy[AGENT0 + other] = other != agent_id
-    is_enemy[AGENT_DUMMY] = game_type == TEAM
+    is_enemy[AGENT_DUMMY] = game_type == TEAM_GAME
     return is_enemy
 
 
@@ -122,7 +119,7 @@ def _search(board, me, is_enemy, rng, row):
         step_dist = dist[r, c] + 1
         for k in range(4):
             direction = NEIGHBOUR_ORDER[k]
-            nr, nc = r + STEP_DR[direction], c + STEP_DC[direction]
+            nr, nc = r + ACTION_DR[direction], c + ACTION_DC[direction]
             if nr < 0 or nr >= size or nc < 0 or nc >= size or not is_node[nr, nc]:
                 continue
             if step_dist < dist[nr, nc]:
@@ -167,7 +164,7 @@ def _first_step(target, me, prev, size) -> int:
         return -1
     dr, dc = cell // size - me // size, cell % size - me % size
     for direction in range(UP, RIGHT + 1):
-        if STEP_DR[direction] == dr and STEP_DC[direction] == dc:
+        if ACTION_DR[direction] == dr and ACTION_DC[direction] == dc:
             return direction
     return -1
 
@@ -217,7 +214,7 @@ def _stuck(board, is_enemy, me, start, blast_range) -> bool:
             return False
         for k in range(4):
             direction = NEIGHBOUR_ORDER[k]
-            nr, nc = r + STEP_DR[direction], c + STEP_DC[direction]
+            nr, nc = r + ACTION_DR[direction], c + ACTION_DC[direction]
             if nr < 0 or nr >= size or nc < 0 or nc >= size or seen[nr, nc]:
                 continue
             if nr * size + nc == me or not _passable(board[nr, nc], is_enemy):
@@ -245,7 +242,7 @@ def _safe_directions(board, is_enemy, me, unsafe_order, num_unsafe, unsafe_range
     if num_unsafe == 4:
         for k in range(4):
             direction = unsafe_order[k]
-            nr, nc = mr + STEP_DR[direction], mc + STEP_DC[direction]
+            nr, nc = mr + ACTION_DR[direction], mc + ACTION_DC[direction]
             if nr < 0 or nr >= size or nc < 0 or nc >= size:
                 continue
             if not _passable(board[nr, nc], is_enemy):  # `me` (now a bomb) is never a neighbour
@@ -259,7 +256,7 @@ def _safe_directions(board, is_enemy, me, unsafe_order, num_unsafe, unsafe_range
     off_board = np.zeros(5, np.bool_)
     for k in range(4):
         direction = NEIGHBOUR_ORDER[k]
-        nr, nc = mr + STEP_DR[direction], mc + STEP_DC[direction]
+        nr, nc = mr + ACTION_DR[direction], mc + ACTION_DC[direction]
         if nr < 0 or nr >= size or nc < 0 or nc >= size:
             off_board[direction] = True
             continue
@@ -288,7 +285,7 @@ def _wander(board, is_enemy, me, bomb_cells, bomb_strengths, recent, recent_len,
     num_valid = 0
     for k in range(5):
         direction = WANDER_ORDER[k]
-        nr, nc = mr + STEP_DR[direction], mc + STEP_DC[direction]
+        nr, nc = mr + ACTION_DR[direction], mc + ACTION_DC[direction]
         if nr < 0 or nr >= size or nc < 0 or nc >= size or not _passable(board[nr, nc], is_enemy):
             continue
         if not _in_bomb_line(nr, nc, bomb_cells, bomb_strengths, size):
@@ -297,7 +294,7 @@ def _wander(board, is_enemy, me, bomb_cells, bomb_strengths, recent, recent_len,
     fresh = np.empty(5, np.int64)
     num_fresh = 0
     for k in range(num_valid):
-        nr, nc = mr + STEP_DR[valid[k]], mc + STEP_DC[valid[k]]
+        nr, nc = mr + ACTION_DR[valid[k]], mc + ACTION_DC[valid[k]]
         visited = False
         for j in range(recent_len[row]):
             if recent[row, j, 0] == nr and recent[row, j, 1] == nc:
@@ -424,7 +421,7 @@ def decide(
     # R6: approach wood within 2 steps unless the next cell is in a bomb's line.
     direction = _first_step(_nearest(board, is_node, dist, WOODS, 2), me, prev, size)
     if direction >= 0:
-        nr, nc = mr + STEP_DR[direction], mc + STEP_DC[direction]
+        nr, nc = mr + ACTION_DR[direction], mc + ACTION_DC[direction]
         if not _in_bomb_line(nr, nc, bomb_cells, bomb_strengths, size):
             return direction
 
@@ -543,7 +540,7 @@ class SimpleAgent:
 
     def __init__(self) -> None:
         self.agent_id = 0
-        self.game_type = TEAM
+        self.game_type = TEAM_GAME
         self.memory = new_memory(1, np.random.default_rng(0))
 
     def reset(self, agent_id: int, game_type: int, rng: np.random.Generator) -> None:

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 from numba import njit
 
-RIGID = 1
-WOOD = 2
+from .constants import Item
+
+RIGID, WOOD = int(Item.RIGID), int(Item.WOOD)  # bound for the kernels (numba freezes globals)
 
 
 @njit(cache=True, inline="always")

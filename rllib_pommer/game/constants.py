@@ -54,6 +54,10 @@ class GameType(IntEnum):
     TEAM = 2
 
 
+# Codes a true board holds (Fog and AgentDummy appear in observations only), and the power-ups.
+STATE_BOARD_CODES = tuple(int(i) for i in Item if i not in (Item.FOG, Item.AGENT_DUMMY))
+POWER_UP_CODES = (int(Item.EXTRA_BOMB), int(Item.INCR_RANGE), int(Item.KICK))
+
 NUM_AGENTS = 4
 NUM_ACTIONS = 6
 MAX_AMMO = 10

@@ -25,6 +25,7 @@ from .constants import (
 from .state import A_ALIVE, A_AMMO, A_BLAST, A_COL, A_ROW, M_ITEMS, GameState
 
 MAX_UNREACHABLE_PASSAGES = 4
+PASSAGE, RIGID = int(Item.PASSAGE), int(Item.RIGID)  # bound for the kernel below
 
 
 def _layout(size: int) -> tuple[np.ndarray, list[tuple[int, int]], np.ndarray]:
@@ -63,14 +64,14 @@ def count_unreachable_passages(board, start_row, start_col):
         head += 1
         for dr, dc in ((-1, 0), (1, 0), (0, -1), (0, 1)):
             rr, cc = r + dr, c + dc
-            if 0 <= rr < size and 0 <= cc < size and not seen[rr, cc] and board[rr, cc] != 1:
+            if 0 <= rr < size and 0 <= cc < size and not seen[rr, cc] and board[rr, cc] != RIGID:
                 seen[rr, cc] = True
                 queue[tail, 0], queue[tail, 1] = rr, cc
                 tail += 1
     missed = 0
     for r in range(size):
         for c in range(size):
-            if board[r, c] == 0 and not seen[r, c]:
+            if board[r, c] == PASSAGE and not seen[r, c]:
                 missed += 1
     return missed
 

@@ -9,6 +9,13 @@ from __future__ import annotations
 
 from numba import njit
 
+from .constants import (
+    FLAME_LIFE_AT_CREATION,
+    NUM_AGENTS,
+    STATE_BOARD_CODES,
+    Action,
+    Item,
+)
 from .state import (
     A_ALIVE,
     A_AMMO,
@@ -38,8 +45,9 @@ VIOLATIONS = (
     "a flame has a life outside 0..2 or its cell does not show Flames",
     "a new flame lies outside every blast cross of this step's bombs",
 )
-_VALID_CODES = (0, 1, 2, 3, 4, 6, 7, 8, 10, 11, 12, 13)
-EXTRA_BOMB, FLAMES, AGENT0 = 6, 4, 10
+# Bound for the kernels (numba freezes module globals).
+EXTRA_BOMB, FLAMES, AGENT0 = int(Item.EXTRA_BOMB), int(Item.FLAMES), int(Item.AGENT0)
+BOMB_ACTION = int(Action.BOMB)
 
 
 @njit(cache=True)
@@ -55,8 +63,8 @@ def _new_flame_explained(r, c, before_bombs, n_before, before_agents, actions):
         for dr, dc in ((0, 0), (-1, 0), (1, 0), (0, -1), (0, 1)):
             if _in_reach(r, c, before_bombs[b, B_ROW] + dr, before_bombs[b, B_COL] + dc, reach):
                 return True
-    for a in range(4):
-        if before_agents[a, A_ALIVE] != 0 and actions[a] == 5:
+    for a in range(NUM_AGENTS):
+        if before_agents[a, A_ALIVE] != 0 and actions[a] == BOMB_ACTION:
             reach = before_agents[a, A_BLAST] - 1
             if _in_reach(r, c, before_agents[a, A_ROW], before_agents[a, A_COL], reach):
                 return True
@@ -89,12 +97,12 @@ def step_violation(before_board, before_agents, before_bombs, n_before, before_i
     for r in range(size):
         for c in range(size):
             valid = False
-            for code in _VALID_CODES:
+            for code in STATE_BOARD_CODES:
                 if board[r, c] == code:
                     valid = True
             if not valid:
                 return 1
-    for a in range(4):
+    for a in range(NUM_AGENTS):
         moved = (agents[a, A_ROW] != before_agents[a, A_ROW]
                  or agents[a, A_COL] != before_agents[a, A_COL])
         if moved and _extra_bomb_under(agents[a, A_ROW], agents[a, A_COL], before_board,
@@ -102,11 +110,11 @@ def step_violation(before_board, before_agents, before_bombs, n_before, before_i
             capacity[a] += 1
         if agents[a, A_ALIVE] == 0:
             continue
-        for other in range(a + 1, 4):
+        for other in range(a + 1, NUM_AGENTS):
             if (agents[other, A_ALIVE] != 0 and agents[other, A_ROW] == agents[a, A_ROW]
                     and agents[other, A_COL] == agents[a, A_COL]):
                 return 2
-    for a in range(4):
+    for a in range(NUM_AGENTS):
         drawn = 0
         for r in range(size):
             for c in range(size):
@@ -117,7 +125,7 @@ def step_violation(before_board, before_agents, before_bombs, n_before, before_i
                 return 3
         elif drawn != 0:
             return 3
-    for a in range(4):
+    for a in range(NUM_AGENTS):
         live = 0
         for b in range(meta[M_BOMBS]):
             if bombs[b, B_OWNER] == a:
@@ -126,9 +134,9 @@ def step_violation(before_board, before_agents, before_bombs, n_before, before_i
             return 4
     for f in range(meta[M_FLAMES]):
         r, c, life = flames[f, F_ROW], flames[f, F_COL], flames[f, F_LIFE]
-        if life < 0 or life > 2 or board[r, c] != FLAMES:
+        if life < 0 or life > FLAME_LIFE_AT_CREATION or board[r, c] != FLAMES:
             return 5
-        if life == 2 and not _new_flame_explained(r, c, before_bombs, n_before, before_agents,
-                                                  actions):
+        if life == FLAME_LIFE_AT_CREATION and not _new_flame_explained(
+                r, c, before_bombs, n_before, before_agents, actions):
             return 6
     return 0

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from numba import njit
 
+from .constants import NUM_AGENTS, Item
 from .state import (
     A_ALIVE,
     A_AMMO,
@@ -24,7 +25,7 @@ from .state import (
     M_STEP,
 )
 
-FOG = 5
+FOG = int(Item.FOG)  # bound for the kernel (numba freezes globals)
 
 
 @njit(cache=True, inline="always")
@@ -42,7 +43,7 @@ def observe_game(board, agents, bombs, flames, meta, view_radius, game_type,
     board cells, bombs and flames outside the Chebyshev window (`view_radius` < 0: no fog).
     """
     size = board.shape[0]
-    for a in range(4):
+    for a in range(NUM_AGENTS):
         cr, cc = agents[a, A_ROW], agents[a, A_COL]
         for r in range(size):
             for c in range(size):
@@ -65,7 +66,7 @@ def observe_game(board, agents, bombs, flames, meta, view_radius, game_type,
         o_ammo[a] = agents[a, A_AMMO]
         o_strength[a] = agents[a, A_BLAST]
         o_kick[a] = agents[a, A_KICK] != 0
-        for i in range(4):
+        for i in range(NUM_AGENTS):
             o_alive[a, i] = agents[i, A_ALIVE] != 0
         o_type[a] = game_type
         o_step[a] = meta[M_STEP]

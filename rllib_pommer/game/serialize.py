@@ -17,6 +17,8 @@ from .constants import (
     MAX_FLAMES,
     MAX_ITEMS,
     NUM_AGENTS,
+    POWER_UP_CODES,
+    STATE_BOARD_CODES,
     GameType,
     Item,
     enemies_of,
@@ -37,9 +39,6 @@ from .state import (
     GameState,
     empty_state,
 )
-
-STATE_BOARD_CODES = frozenset(int(i) for i in Item) - {int(Item.FOG), int(Item.AGENT_DUMMY)}
-POWER_UP_CODES = frozenset({int(Item.EXTRA_BOMB), int(Item.INCR_RANGE), int(Item.KICK)})
 
 
 def _field(d: Mapping, key: str, where: str) -> Any:
@@ -97,7 +96,7 @@ def load_state(d: Mapping, out: GameState | None = None, index: int = 0) -> Game
     """Fill game `index` of `out` (a new batch of one by default) from a reference state dict."""
     board = _grid(_field(d, "board", "state"), "state.board", 11)
     size = board.shape[0]
-    bad = sorted(set(np.unique(board).tolist()) - STATE_BOARD_CODES)
+    bad = sorted(set(np.unique(board).tolist()) - set(STATE_BOARD_CODES))
     if bad:
         r, c = np.argwhere(np.isin(board, bad))[0]
         raise ValueError(f"state.board: unknown item code {bad[0]} at [{r}, {c}]")

@@ -12,6 +12,18 @@ import numpy as np
 from numba import njit
 
 from .blast import mark_blast
+from .constants import (
+    ACTION_DC,
+    ACTION_DR,
+    BOMB_LIFE_AT_LAYING,
+    FLAME_LIFE_AT_CREATION,
+    MAX_AMMO,
+    NUM_AGENTS,
+    Action,
+    GameType,
+    Item,
+    Result,
+)
 from .state import (
     A_ALIVE,
     A_AMMO,
@@ -38,18 +50,15 @@ from .state import (
     M_STEP,
 )
 
-PASSAGE, RIGID, WOOD, BOMB, FLAMES = 0, 1, 2, 3, 4
-EXTRA_BOMB, INCR_RANGE, KICK = 6, 7, 8
-AGENT0 = 10
-STOP, BOMB_ACTION = 0, 5
-MAX_AMMO = 10
-BOMB_LIFE = 10
-FLAME_LIFE = 2
-TEAM = 2
-RESULT_WIN, RESULT_TIE, RESULT_INCOMPLETE = 0, 2, 3
-
-DR = np.array([0, -1, 1, 0, 0, 0], dtype=np.int64)
-DC = np.array([0, 0, 0, -1, 1, 0], dtype=np.int64)
+# The kernels' compile-time constants (numba freezes module globals), bound from constants.py.
+PASSAGE, RIGID, WOOD, BOMB, FLAMES = (
+    int(i) for i in (Item.PASSAGE, Item.RIGID, Item.WOOD, Item.BOMB, Item.FLAMES))
+EXTRA_BOMB, INCR_RANGE, KICK = int(Item.EXTRA_BOMB), int(Item.INCR_RANGE), int(Item.KICK)
+AGENT0 = int(Item.AGENT0)
+STOP, BOMB_ACTION = int(Action.STOP), int(Action.BOMB)
+TEAM_GAME = int(GameType.TEAM)
+RESULT_WIN, RESULT_TIE, RESULT_INCOMPLETE = (
+    int(Result.WIN), int(Result.TIE), int(Result.INCOMPLETE))
 
 
 @njit(cache=True, inline="always")
@@ -92,7 +101,7 @@ def _age_flames(board, flames, items, meta):
 def _agent_intents(board, agents, bombs, meta, actions, want):
     """§3.2: clear agents' cells, lay bombs, and set each living agent's wanted cell."""
     size = board.shape[0]
-    for a in range(4):
+    for a in range(NUM_AGENTS):
         if agents[a, A_ALIVE] == 0:
             continue
         r, c = agents[a, A_ROW], agents[a, A_COL]
@@ -111,12 +120,12 @@ def _agent_intents(board, agents, bombs, meta, actions, want):
                 bombs[n_bombs, B_ROW] = r
                 bombs[n_bombs, B_COL] = c
                 bombs[n_bombs, B_OWNER] = a
-                bombs[n_bombs, B_LIFE] = BOMB_LIFE
+                bombs[n_bombs, B_LIFE] = BOMB_LIFE_AT_LAYING
                 bombs[n_bombs, B_BLAST] = agents[a, A_BLAST]
                 bombs[n_bombs, B_DIR] = 0
                 meta[M_BOMBS] = n_bombs + 1
         elif action != STOP:
-            tr, tc = r + DR[action], c + DC[action]
+            tr, tc = r + ACTION_DR[action], c + ACTION_DC[action]
             if 0 <= tr < size and 0 <= tc < size and not _is_wall(board[tr, tc]):
                 want[a, 0], want[a, 1] = tr, tc
 
@@ -131,7 +140,7 @@ def _bomb_intents(board, bombs, n_bombs, bwant):
         board[r, c] = PASSAGE
         d = bombs[b, B_DIR]
         if d != 0:
-            tr, tc = r + DR[d], c + DC[d]
+            tr, tc = r + ACTION_DR[d], c + ACTION_DC[d]
             if 0 <= tr < size and 0 <= tc < size:
                 code = board[tr, tc]
                 if not _is_power_up(code) and not _is_wall(code):
@@ -159,11 +168,11 @@ def _resolve_crossings(size, agents, bombs, n_bombs, want, bwant):
 
     An agent-bomb crossing sends back only the bomb; the agent then meets the bomb in the kick pass.
     """
-    keys = np.empty(4 + n_bombs, np.int64)
-    owners = np.empty(4 + n_bombs, np.int64)
-    is_agent = np.empty(4 + n_bombs, np.bool_)
+    keys = np.empty(NUM_AGENTS + n_bombs, np.int64)
+    owners = np.empty(NUM_AGENTS + n_bombs, np.int64)
+    is_agent = np.empty(NUM_AGENTS + n_bombs, np.bool_)
     n = 0
-    for a in range(4):
+    for a in range(NUM_AGENTS):
         if agents[a, A_ALIVE] == 0:
             continue
         r, c = agents[a, A_ROW], agents[a, A_COL]
@@ -210,7 +219,7 @@ def _first_settle(agents, bombs, n_bombs, want, bwant, ao, bo):
     changed = True
     while changed:
         changed = False
-        for a in range(4):
+        for a in range(NUM_AGENTS):
             if agents[a, A_ALIVE] == 0 or not _agent_moves(agents, want, a):
                 continue
             if ao[want[a, 0], want[a, 1]] > 1 or bo[want[a, 0], want[a, 1]] > 1:
@@ -250,7 +259,7 @@ def _kick_pass(board, agents, bombs, n_bombs, actions, want, bwant, ao, bo, kick
         if ao[dr, dc] == 0:
             continue
         a = -1
-        for i in range(4):
+        for i in range(NUM_AGENTS):
             if agents[i, A_ALIVE] != 0 and want[i, 0] == dr and want[i, 1] == dc:
                 a = i
                 break
@@ -264,7 +273,7 @@ def _kick_pass(board, agents, bombs, n_bombs, actions, want, bwant, ao, bo, kick
         kicked = False
         if agents[a, A_KICK] != 0:
             direction = actions[a]
-            tr, tc = dr + DR[direction], dc + DC[direction]
+            tr, tc = dr + ACTION_DR[direction], dc + ACTION_DC[direction]
             if (
                 0 <= tr < size
                 and 0 <= tc < size
@@ -300,7 +309,7 @@ def _second_settle(agents, bombs, n_bombs, want, bwant, ao, bo, kicker_of, kicke
     changed = True
     while changed:
         changed = False
-        for a in range(4):
+        for a in range(NUM_AGENTS):
             if agents[a, A_ALIVE] == 0 or not _agent_moves(agents, want, a):
                 continue
             if ao[want[a, 0], want[a, 1]] > 1 or bo[want[a, 0], want[a, 1]] != 0:
@@ -336,11 +345,11 @@ def _commit_moves(board, agents, bombs, n_bombs, actions, want, bwant, kicked_by
             bombs[b, B_DIR] = 0
         else:
             bombs[b, B_ROW], bombs[b, B_COL] = bwant[b, 0], bwant[b, 1]
-    for a in range(4):
+    for a in range(NUM_AGENTS):
         if agents[a, A_ALIVE] == 0 or not _agent_moves(agents, want, a):
             continue
-        r = agents[a, A_ROW] + DR[actions[a]]
-        c = agents[a, A_COL] + DC[actions[a]]
+        r = agents[a, A_ROW] + ACTION_DR[actions[a]]
+        c = agents[a, A_COL] + ACTION_DC[actions[a]]
         agents[a, A_ROW], agents[a, A_COL] = r, c
         code = board[r, c]
         if code == EXTRA_BOMB:
@@ -394,12 +403,12 @@ def _redraw(board, agents, bombs, flames, meta, fire, was_alive):
             if fire[r, c] != 0:
                 flames[n_flames, F_ROW] = r
                 flames[n_flames, F_COL] = c
-                flames[n_flames, F_LIFE] = FLAME_LIFE
+                flames[n_flames, F_LIFE] = FLAME_LIFE_AT_CREATION
                 n_flames += 1
     meta[M_FLAMES] = n_flames
     for i in range(n_flames):
         board[flames[i, F_ROW], flames[i, F_COL]] = FLAMES
-    for a in range(4):
+    for a in range(NUM_AGENTS):
         if not was_alive[a]:
             continue
         r, c = agents[a, A_ROW], agents[a, A_COL]
@@ -414,20 +423,20 @@ def _score(agents, meta, game_type, max_steps, rewards):
     """§4: done flag, rewards by agent id and the result code, after the step counter moved."""
     n_alive = 0
     alive_mask = 0
-    for a in range(4):
+    for a in range(NUM_AGENTS):
         if agents[a, A_ALIVE] != 0:
             n_alive += 1
             alive_mask |= 1 << a
     timeout = meta[M_STEP] >= max_steps
-    if game_type == TEAM:
+    if game_type == TEAM_GAME:
         team_a_only = alive_mask != 0 and (alive_mask & 0b1010) == 0
         team_b_only = alive_mask != 0 and (alive_mask & 0b0101) == 0
         done = timeout or n_alive <= 1 or team_a_only or team_b_only
         if team_a_only:
-            for a in range(4):
+            for a in range(NUM_AGENTS):
                 rewards[a] = 1 if a % 2 == 0 else -1
         elif team_b_only:
-            for a in range(4):
+            for a in range(NUM_AGENTS):
                 rewards[a] = 1 if a % 2 == 1 else -1
         elif timeout or n_alive == 0:
             rewards[:] = -1
@@ -435,7 +444,7 @@ def _score(agents, meta, game_type, max_steps, rewards):
             rewards[:] = 0
     else:
         done = timeout or n_alive <= 1
-        for a in range(4):
+        for a in range(NUM_AGENTS):
             if n_alive == 1:
                 rewards[a] = 1 if agents[a, A_ALIVE] != 0 else -1
             elif timeout:
@@ -444,7 +453,7 @@ def _score(agents, meta, game_type, max_steps, rewards):
                 rewards[a] = 0 if agents[a, A_ALIVE] != 0 else -1
     if not done:
         return RESULT_INCOMPLETE
-    for a in range(4):
+    for a in range(NUM_AGENTS):
         if rewards[a] == 1:
             return RESULT_WIN
     return RESULT_TIE
@@ -460,7 +469,7 @@ def step_game(board, agents, bombs, flames, items, meta, actions, rewards, game_
     size = board.shape[0]
     was_alive = agents[:, A_ALIVE] != 0
     _age_flames(board, flames, items, meta)
-    want = np.empty((4, 2), np.int64)
+    want = np.empty((NUM_AGENTS, 2), np.int64)
     _agent_intents(board, agents, bombs, meta, actions, want)
     n_bombs = meta[M_BOMBS]
     bwant = np.empty((n_bombs, 2), np.int64)
@@ -468,13 +477,13 @@ def step_game(board, agents, bombs, flames, items, meta, actions, rewards, game_
     _resolve_crossings(size, agents, bombs, n_bombs, want, bwant)
     ao = np.zeros((size, size), np.int64)
     bo = np.zeros((size, size), np.int64)
-    for a in range(4):
+    for a in range(NUM_AGENTS):
         if agents[a, A_ALIVE] != 0:
             ao[want[a, 0], want[a, 1]] += 1
     for b in range(n_bombs):
         bo[bwant[b, 0], bwant[b, 1]] += 1
     _first_settle(agents, bombs, n_bombs, want, bwant, ao, bo)
-    kicker_of = np.full(4, -1, np.int64)
+    kicker_of = np.full(NUM_AGENTS, -1, np.int64)
     kicked_by = np.full(n_bombs, -1, np.int64)
     if _kick_pass(board, agents, bombs, n_bombs, actions, want, bwant, ao, bo, kicker_of,
                   kicked_by):
