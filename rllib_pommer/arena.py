@@ -10,11 +10,14 @@ fixed.
 
 from __future__ import annotations
 
+import csv
+import json
 import math
 import os
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import asdict, dataclass, field
 from functools import partial
+from pathlib import Path
 
 import numpy as np
 import torch
@@ -291,3 +294,18 @@ def _mean_ci(values: np.ndarray) -> list[float]:
 def record_rows(records: Sequence[GameRecord]) -> Iterator[dict]:
     for record in records:
         yield asdict(record)
+
+
+def write_records(path: Path, records: Sequence[GameRecord]) -> None:
+    """The rows of `record_rows` as a .csv file (lists as JSON) or, for any other suffix, JSON
+    Lines."""
+    rows = list(record_rows(records))
+    if path.suffix == ".csv":
+        with open(path, "w", newline="") as f:
+            writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+            writer.writeheader()
+            writer.writerows({k: json.dumps(v) if isinstance(v, list) else v
+                              for k, v in row.items()} for row in rows)
+    else:
+        with open(path, "w") as f:
+            f.writelines(json.dumps(row) + "\n" for row in rows)

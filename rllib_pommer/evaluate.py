@@ -19,7 +19,6 @@ Same seed, same records.
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import sys
 import time
@@ -28,7 +27,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from .agents.registry import FILTERS
-from .arena import MatchSpec, play_match, record_games, record_rows, summarise
+from .arena import MatchSpec, play_match, record_games, summarise, write_records
 from .game.records import write_games
 from .outputs import check_output
 
@@ -46,19 +45,6 @@ def _positive(text: str) -> int:
     if value <= 0:
         raise argparse.ArgumentTypeError(f"must be a positive number of games, got {value}")
     return value
-
-
-def write_records(path: Path, records) -> None:
-    rows = list(record_rows(records))
-    if path.suffix == ".csv":
-        with open(path, "w", newline="") as f:
-            writer = csv.DictWriter(f, fieldnames=list(rows[0]))
-            writer.writeheader()
-            writer.writerows({k: json.dumps(v) if isinstance(v, list) else v
-                              for k, v in row.items()} for row in rows)
-    else:
-        with open(path, "w") as f:
-            f.writelines(json.dumps(row) + "\n" for row in rows)
 
 
 def format_summary(spec: MatchSpec, summary: dict) -> str:

@@ -12,6 +12,9 @@ by its directory: `python -m rllib_pommer.evaluate --team runs/quick --vs static
 `--pack` shrinks a stopped run to what resuming needs (newest checkpoint, stage checkpoints, a
 small history.csv of the results), so it can be committed or copied and continued with
 `--resume` on another machine, at another path.
+
+The options are the fields of `rl/settings.RunSettings`; PPO's own settings are the curriculum's
+(`rl/settings.PPOSettings`, overridable in its [ppo] table).
 """
 
 from __future__ import annotations
@@ -20,21 +23,26 @@ import argparse
 import sys
 from pathlib import Path
 
-DEFAULT_CURRICULUM = "quick"
+from .cli_options import add_options, settings_from
+from .rl.settings import RunSettings
+
+HELP = {
+    "curriculum": "a name in curriculum/ or a .toml path (default: %(default)s)",
+    "out": "run directory (default: runs/<name>)",
+    "resume": "continue the run in --out",
+    "address": "an existing Ray cluster (HOST:PORT or 'auto')",
+    "pi_weights": "pi state_dict to start from (overrides the file)",
+    "num_env_runners": "remote env runners (0: sample in the driver; use more on a cluster)",
+    "seed": "default %(default)s",
+    "num_cpus": "CPUs of the Ray instance started here (default %(default)s)",
+    "torch_threads": "torch threads per process (default %(default)s)",
+}
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m rllib_pommer.train", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--curriculum", default=DEFAULT_CURRICULUM,
-                        help="a name in curriculum/ or a .toml path (default: %(default)s)")
-    parser.add_argument("--out", type=Path, help="run directory (default: runs/<name>)")
-    parser.add_argument("--resume", action="store_true", help="continue the run in --out")
-    parser.add_argument("--address", help="an existing Ray cluster (HOST:PORT or 'auto')")
-    parser.add_argument("--pi-weights", help="pi state_dict to start from (overrides the file)")
-    parser.add_argument("--num-env-runners", type=int, default=0,
-                        help="remote env runners (0: sample in the driver; use more on a cluster)")
-    parser.add_argument("--seed", type=int, default=0)
+    add_options(parser, RunSettings, HELP)
     parser.add_argument("--pack", action="store_true",
                         help="shrink the stopped run in --out for another machine, then exit")
     args = parser.parse_args(argv)
@@ -44,26 +52,11 @@ def main(argv: list[str] | None = None) -> int:
     # Imports after parsing, so --help is instant.
     import ray
 
-    from .rl import ray_session
-    from .rl.config import check_pi_weights
-    from .rl.curriculum import load_curriculum
-    from .rl.training import RayStartError, check_run_dir, init_ray, resumes_from_checkpoint, train
+    from .rl.training import RayStartError, start_run, train
 
     try:  # everything that can be checked is checked before Ray starts
-        if args.num_env_runners < 0:
-            raise ValueError(f"--num-env-runners must be 0 or more, got {args.num_env_runners}")
-        curriculum = load_curriculum(args.curriculum)
-        out = args.out or Path("runs") / curriculum.name
-        ended = ray_session.reap(out)  # what a SIGKILLed run in `out` left running
-        if ended:
-            print(f"ended {len(ended)} Ray processes left by the killed run in {out}",
-                  file=sys.stderr)
-        check_run_dir(out, args.resume)
-        if not resumes_from_checkpoint(out, args.resume):  # else pi comes from the checkpoint
-            check_pi_weights(Path(args.pi_weights) if args.pi_weights else curriculum.pi_weights)
-        init_ray(args.address)
-        if args.address is None:  # our own Ray: note it, for the next start to clean up after
-            ray_session.record(out)
+        settings = settings_from(RunSettings, args)
+        curriculum, out = start_run(settings, lambda line: print(line, file=sys.stderr))
     except ValueError as exc:
         parser.error(str(exc))
     except RayStartError as exc:  # not the user's input: one line and exit 1, no traceback
@@ -71,8 +64,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {exc}", file=sys.stderr)
         return 1
     try:
-        result = train(curriculum, out, resume=args.resume, pi_weights=args.pi_weights,
-                       num_env_runners=args.num_env_runners, seed=args.seed)
+        result = train(curriculum, out, settings)
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

@@ -15,7 +15,7 @@ import pyarrow.parquet as pq
 import pytest
 import tomllib
 
-from rllib_pommer import collect, imitate, replay, serve
+from rllib_pommer import bc, collect, imitate, replay, serve
 from rllib_pommer.data.collector import Collection
 from rllib_pommer.data.schema import SHARD_KEY
 from rllib_pommer.game.records import write_games
@@ -202,7 +202,7 @@ def test_policy_files_for_names_with_quotes_stay_valid_toml(tmp_path):
     out = tmp_path / "policies" / 'clone "b\\2" \U0001f600\t'
     out.parent.mkdir()
     data_names = 'data "v2" \\ tab\t é'
-    policy = imitate.write_policy_file(out, f"Behaviour cloning of SimpleAgent ({data_names})")
+    policy = bc.write_policy_file(out, f"Behaviour cloning of SimpleAgent ({data_names})")
     written = tomllib.loads(policy.read_text(encoding="utf-8"))
     assert written["weights"] == f"{out.name}/pi.pt"
     assert written["description"] == f"Behaviour cloning of SimpleAgent ({data_names})"

@@ -9,11 +9,10 @@ import pytest
 import torch
 
 from rllib_pommer import bc
-from rllib_pommer.bc import BCConfig, evaluate, train
+from rllib_pommer.bc import BCConfig, evaluate, train, write_policy_file
 from rllib_pommer.data.collector import Collection
 from rllib_pommer.data.dataset import open_dataset
 from rllib_pommer.evaluate import main as evaluate_main
-from rllib_pommer.imitate import write_policy_file
 from rllib_pommer.learned import load_policy_net
 from rllib_pommer.network import PommerNet
 

@@ -1,11 +1,11 @@
 """Expert play: 2v2 Team games of four SimpleAgents, every living agent's decision recorded.
 
 The games of a range run in one batch (`Games` plus one batched SimpleAgent call per step, the
-fastest path, see bench.simple_batched_run); a slot whose game ends is refilled with the next game
-of the range. Game g is seeded as in the arena (`SeedSequence([seed, g]).spawn(5)`: the board from
-the first child, seat s's random stream from child s + 1), and each agent's stream lives in its own
-memory row, so a game's samples depend only on (seed, g): not on the batch, its refills, the shard
-or the worker that played it.
+fastest path, see agents/speed.simple_batched_run); a slot whose game ends is refilled with the
+next game of the range. Game g is seeded as in the arena (`SeedSequence([seed, g]).spawn(5)`: the
+board from the first child, seat s's random stream from child s + 1), and each agent's stream
+lives in its own memory row, so a game's samples depend only on (seed, g): not on the batch, its
+refills, the shard or the worker that played it.
 """
 
 from __future__ import annotations

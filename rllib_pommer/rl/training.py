@@ -32,8 +32,10 @@ import torch
 from ray import tune
 
 from ..viz.training import HISTORY_FILE, write_summary
-from .config import build_config
-from .curriculum import Curriculum
+from . import ray_session
+from .config import build_config, check_pi_weights
+from .curriculum import Curriculum, load_curriculum
+from .settings import RunSettings
 
 STOP_KEY = "env_runners/num_episodes_lifetime"
 
@@ -53,12 +55,13 @@ def _first_line(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {text.splitlines()[0] if text else ''}".rstrip(": ")
 
 
-def init_ray(address: str | None) -> None:
-    """A Ray instance of our own on this machine (at most 2 CPUs), or an existing cluster at
+def init_ray(address: str | None, *, num_cpus: int = RunSettings.num_cpus,
+             torch_threads: int = RunSettings.torch_threads) -> None:
+    """A Ray instance of our own on this machine (`num_cpus` CPUs), or an existing cluster at
     `address`. Our own, even where `ray start` left a cluster running here: a plain `ray.init()`
     would join that one (and refuse `num_cpus`). A bad address is a ValueError; a Ray that does
     not start, a `RayStartError`."""
-    torch.set_num_threads(1)
+    torch.set_num_threads(torch_threads)
     torch.set_flush_denormal(True)
     if address is not None and address != "auto":
         host, _, port = address.removeprefix("ray://").rpartition(":")
@@ -69,7 +72,7 @@ def init_ray(address: str | None) -> None:
                              f"HOST:PORT of a running cluster's head, or 'auto'") from None
     try:
         if address is None:
-            ray.init(address="local", num_cpus=2, include_dashboard=False)
+            ray.init(address="local", num_cpus=num_cpus, include_dashboard=False)
         else:
             ray.init(address=address)
     except Exception as exc:  # Ray raises many types here; each becomes one line
@@ -206,15 +209,36 @@ def resumes_from_checkpoint(out: Path, resume: bool) -> bool:
     return resume and bool(trials) and all(any(t.glob("checkpoint_*")) for t in trials)
 
 
-def train(curriculum: Curriculum, out: Path, *, resume: bool = False,
-          pi_weights: str | Path | None = None, num_env_runners: int = 0, seed: int = 0):
-    """Run (or resume) `curriculum` into the run directory `out`; Ray must be initialised."""
+def start_run(settings: RunSettings, say=print) -> tuple[Curriculum, Path]:
+    """Everything a run checks before Ray starts, then Ray: the curriculum and the run directory
+    (default runs/<curriculum name>), after ending what a SIGKILLed run in that directory left
+    running (told to `say`). Bad input is a ValueError; a Ray that does not start, a
+    `RayStartError`."""
+    curriculum = load_curriculum(settings.curriculum)
+    out = settings.out or Path("runs") / curriculum.name
+    ended = ray_session.reap(out)
+    if ended:
+        say(f"ended {len(ended)} Ray processes left by the killed run in {out}")
+    check_run_dir(out, settings.resume)
+    if not resumes_from_checkpoint(out, settings.resume):  # else pi comes from the checkpoint
+        check_pi_weights(settings.pi_weights or curriculum.pi_weights)
+    init_ray(settings.address, num_cpus=settings.num_cpus, torch_threads=settings.torch_threads)
+    if settings.address is None:  # our own Ray: note it, for the next start to clean up after
+        ray_session.record(out)
+    return curriculum, out
+
+
+def train(curriculum: Curriculum, out: Path, settings: RunSettings):
+    """Run (or resume, `settings.resume`) `curriculum` into the run directory `out`; Ray must be
+    initialised."""
     out = Path(out).resolve()
+    resume = settings.resume
     # Snapshot the experiment state on every controller step (not every ~10 s), so the state on
     # disk always names the latest trial checkpoint and a SIGKILLed run resumes from it.
     os.environ.setdefault("TUNE_GLOBAL_CHECKPOINT_S", "0")
-    config = build_config(curriculum, pi_weights=pi_weights, num_env_runners=num_env_runners,
-                          seed=seed, restoring=resumes_from_checkpoint(out, resume))
+    config = build_config(curriculum, pi_weights=settings.pi_weights,
+                          num_env_runners=settings.num_env_runners, seed=settings.seed,
+                          restoring=resumes_from_checkpoint(out, resume))
     check_run_dir(out, resume)
     if resume:
         tuner = tune.Tuner.restore(str(out), trainable=config.algo_class, param_space=config,

@@ -8,8 +8,7 @@ import re
 import numpy as np
 from PIL import Image
 
-from rllib_pommer.arena import GameRecord
-from rllib_pommer.evaluate import write_records
+from rllib_pommer.arena import GameRecord, write_records
 from rllib_pommer.game.records import write_games
 from rllib_pommer.report import main
 

@@ -1,12 +1,13 @@
-"""PPO's speed under RLlib: the whole loop (real env against a zero-cost twin) and the learner.
+"""PPO's speed under RLlib, for `bench train` and `bench learn`: the whole loop (real env against a
+zero-cost twin) and the learner.
 
-`bench_learner` times the real learner alone: RLlib's `LearnerGroup.update` (learner connector
+`learner_speeds` times the real learner alone: RLlib's `LearnerGroup.update` (learner connector
 with the advantage estimation, then `num_epochs` passes of minibatches of 128 through the real
 `PommerPPOModule`) on batches the real env runner sampled with the quick curriculum's config, with
-pi trainable and with pi frozen (the value warm-up). Samples/s count learner rows times epochs.
+pi trainable and with pi frozen (the value warm-up), beside the plain-torch baselines of
+`learn_speed.py` on the same thread count. Samples/s count learner rows times epochs.
 
-
-`bench_train(iterations)` builds the PPO config of a curriculum (default "quick", first stage:
+`train_speeds(iterations)` builds the PPO config of a curriculum (default "quick", first stage:
 all four agents exposed, SimpleAgent opponents as stateful fixed modules, the learner's filters)
 twice, once on the real env and once on `ZeroCostEnv`, which has the same spaces, agents and
 infos but replays one precomputed observation and ends episodes after the real run's mean episode
@@ -28,11 +29,13 @@ import torch
 from ray.rllib.execution.rollout_ops import synchronous_parallel_sample
 from ray.tune.registry import register_env
 
+from .. import learn_speed
 from ..network import PommerNet
 from .config import build_config
 from .curriculum import load_curriculum
 from .env import ENV_NAME, PommeEnv
 from .rl_module import LEARNER
+from .settings import RunSettings
 from .training import init_ray
 
 ZERO_COST_ENV = "pommerman_team_zero_cost"
@@ -95,7 +98,7 @@ def _random_pi_weights() -> Iterator[Path]:
             ray.shutdown()
 
 
-def bench_train(iterations: int = 3, curriculum: str = "quick") -> dict:
+def train_speeds(iterations: int = 3, curriculum: str = "quick") -> dict:
     """Env steps/s of PPO on the real and the zero-cost env, and their ratio."""
     with _random_pi_weights() as weights:
         plan = load_curriculum(curriculum)
@@ -134,7 +137,7 @@ def _learner_samples_per_s(algo, frozen: bool, updates: int) -> float:
     return samples / seconds
 
 
-def bench_learner(updates: int = 3, curriculum: str = "quick") -> dict:
+def _rllib_learner_speeds(updates: int, curriculum: str) -> dict:
     """Learner samples/s of the real RLlib update, pi trainable and pi frozen."""
     with _random_pi_weights() as weights:
         algo = build_config(load_curriculum(curriculum), pi_weights=weights).build_algo()
@@ -144,3 +147,18 @@ def bench_learner(updates: int = 3, curriculum: str = "quick") -> dict:
         finally:
             algo.stop()
     return {"ppo_samples_per_s": trainable, "ppo_frozen_pi_samples_per_s": frozen}
+
+
+def learner_speeds(updates: int = 3, curriculum: str = "quick") -> dict:
+    """Learner samples/s on a training run's torch threads: RLlib's PPO update and behaviour
+    cloning, each beside its plain-torch baseline, and the float32 FLOP bound of this core."""
+    threads = RunSettings().torch_threads
+    torch.set_num_threads(threads)
+    torch.set_flush_denormal(True)
+    result = {"torch_threads": threads, **_rllib_learner_speeds(updates, curriculum)}
+    result["ppo_baseline_samples_per_s"] = learn_speed.plain_ppo_samples_per_s()
+    result.update(learn_speed.bc_speeds())
+    result.update(learn_speed.flop_bound())
+    result["ppo_speedup"] = result["ppo_samples_per_s"] / result["ppo_baseline_samples_per_s"]
+    result["bc_speedup"] = result["bc_samples_per_s"] / result["bc_baseline_samples_per_s"]
+    return {k: round(v, 3) if isinstance(v, float) else v for k, v in result.items()}

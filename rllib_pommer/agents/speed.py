@@ -1,0 +1,60 @@
+"""How fast SimpleAgent plays: protocol (b) of tests/reference/README.md §4, for `bench agents`.
+
+One run plays `GAMES_PER_RUN` games of four SimpleAgents, game g of run r seeded
+2000 + 1000 r + g, and returns (steps/s, games/s) over the whole loop including reset: once with
+one `SimpleAgent` object per seat deciding per call (the reference's shape), once with the batched
+kernel deciding for every seat of every game in one call per step.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..game.constants import NUM_AGENTS, TEAM
+from ..game.engine import Game, Games
+from ..game.state import A_ALIVE
+from .simple import SimpleAgent, new_memory, simple_actions
+
+GAMES_PER_RUN = 20
+
+
+def _seeds(run: int) -> list[int]:
+    return [2000 + 1000 * run + g for g in range(GAMES_PER_RUN)]
+
+
+def simple_objects_run(run: int) -> tuple[float, float]:
+    """Protocol (b) with one SimpleAgent object per seat and the single-game API."""
+    start = time.perf_counter()
+    steps = 0
+    for seed in _seeds(run):
+        game = Game(TEAM)
+        obs = game.reset(seed)
+        agents = [SimpleAgent() for _ in range(NUM_AGENTS)]
+        for seat, agent in enumerate(agents):
+            agent.reset(seat, int(TEAM.game_type), np.random.default_rng([seed, seat]))
+        done = False
+        while not done:
+            alive = game.state.agents[0, :, A_ALIVE] != 0
+            actions = [agents[s].act(obs.select(s)) if alive[s] else 0 for s in range(NUM_AGENTS)]
+            obs, _, done, _ = game.step(actions)
+            steps += 1
+    total = time.perf_counter() - start
+    return steps / total, GAMES_PER_RUN / total
+
+
+def simple_batched_run(run: int) -> tuple[float, float]:
+    """Protocol (b) with the batched engine and one batched SimpleAgent call per step."""
+    start = time.perf_counter()
+    games = Games(GAMES_PER_RUN, TEAM)
+    games.reset(_seeds(run))
+    memory = new_memory(NUM_AGENTS * GAMES_PER_RUN, np.random.default_rng(run))
+    steps = 0
+    while not games.done.all():
+        active = games.alive & ~games.done[:, None]
+        actions = simple_actions(games.obs.agent_rows(), memory, active.ravel())
+        steps += int((~games.done).sum())
+        games.step(actions.reshape(-1, NUM_AGENTS))
+    total = time.perf_counter() - start
+    return steps / total, GAMES_PER_RUN / total

@@ -1,0 +1,130 @@
+"""The report of `python -m rllib_pommer.report`: inputs classified by what they hold, then the
+paper's figures and tables drawn from them into one folder (report.md and PNGs)."""
+
+from __future__ import annotations
+
+import csv
+import re
+from collections import Counter
+from collections.abc import Iterator
+from pathlib import Path
+
+from ..game.records import read_games, read_jsonl
+from .behaviour import heatmaps_by_opponent
+from .figures import (
+    FIG5_MARKS,
+    comparable_opponents,
+    plot_behaviour,
+    plot_filter_effects,
+    plot_training,
+)
+from .frames import load_game
+from .matches import ROW_KEYS, load_outcomes, rates_by_opponent
+from .paper import paper_table
+from .render import render_game
+from .tables import results_table, training_table
+from .training import (
+    RLLIB_WINDOW,
+    WINDOW,
+    find_trials,
+    read_trial,
+    stage_figures,
+    training_curve,
+    write_summary,
+)
+from .viewer import write_viewer
+
+UNSAFE_IN_NAMES = re.compile(r"[^\w.-]+")
+SUMMARIES = "runs"  # below the report's folder: one small trial folder per run of Fig. 3
+
+
+def kind_of(path: Path) -> str:
+    """"trials", "records" (arena rows) or "replays", from what the path holds."""
+    if path.is_dir():
+        if not find_trials(path):
+            raise ValueError(f"{path}: no Tune trial (progress.csv or result.json) in or below it")
+        return "trials"
+    if path.suffix == ".csv":
+        with open(path, newline="") as f:
+            first = dict.fromkeys(next(csv.reader(f), []))
+    else:
+        first = next(read_jsonl(path), {})
+    if "initial_state" in first and "steps" in first:
+        return "replays"
+    if set(first) >= ROW_KEYS:
+        return "records"
+    raise ValueError(f"{path}: neither arena records ({sorted(ROW_KEYS)} ...) nor game replays")
+
+
+def classify(paths: list[Path]) -> dict[str, list[Path]]:
+    found: dict[str, list[Path]] = {"trials": [], "records": [], "replays": []}
+    for path in paths:
+        kind = kind_of(path)
+        found[kind] += find_trials(path) if kind == "trials" else [path]
+    return found
+
+
+def _tables_and_fig4(records: list[Path], out: Path) -> Iterator[str]:
+    outcomes = load_outcomes(records)
+    yield "## Win / loss / tie (the paper's Tables 2 and 3)"
+    yield ("Each cell: team A's win / loss / tie rates; ours over n games with their 95% Wilson "
+           "intervals below them, the paper's over 1000 games last. Variants add jitter "
+           "correction and/or the action filter.")
+    for team in sorted({match.team for match in outcomes}):
+        yield results_table(team, outcomes)
+        ours = rates_by_opponent(outcomes, team)
+        if comparable_opponents(ours):
+            name = f"fig4_filters_{UNSAFE_IN_NAMES.sub('_', team)}.png"  # a team may be a path
+            paper = (paper_table(team) or ("", {}))[1]
+            plot_filter_effects(ours, paper, f"Fig. 4: effect of the filters on {team}", out / name)
+            yield f"![Fig. 4 for {team}]({name})"
+
+
+def _fig3(paths: list[Path], out: Path) -> Iterator[str]:
+    trials = [read_trial(path) for path in paths]
+    plot_training([training_curve(trial) for trial in trials], out / "fig3_training.png")
+    named = Counter(trial.name for trial in trials)
+    for k, trial in enumerate(trials):  # the figure's data
+        write_summary(trial, out / SUMMARIES / (
+            trial.name if named[trial.name] == 1 else f"{trial.name}_{k}"))
+    yield "## Training reward (the paper's Fig. 3)"
+    yield f"From {len(paths)} trial(s): " + ", ".join(f"`{path}`" for path in paths)
+    yield "![Fig. 3](fig3_training.png)"
+    yield (f"One axis per reward kind (shaped and raw returns are not on one scale). Each "
+           f"iteration logs RLlib's mean return of the learner's last {RLLIB_WINDOW} episodes; "
+           f"a curve averages those over the last {WINDOW:,} episodes (each iteration weighted "
+           f"by the episodes it finished), restarted at each phase.")
+    yield training_table([f for trial in trials for f in stage_figures(trial)])
+    yield (f"Each run's curve and training figures per iteration are in `{SUMMARIES}/<run>/"
+           f"progress.csv` (a trial folder this report reads again).")
+
+
+def _fig5_and_game(replays: list[Path], out: Path) -> Iterator[str]:
+    maps = heatmaps_by_opponent(record for path in replays for record in read_games(path))
+    plot_behaviour(maps, out / "fig5_behaviour.png")
+    yield "## Positions and bomb placements (the paper's Fig. 5)"
+    yield "![Fig. 5](fig5_behaviour.png)"
+    yield FIG5_MARKS.replace("\n", " ")
+    first = load_game(replays[0])
+    render_game(first, out / "game.png")
+    write_viewer(first, out / "game.html")
+    yield "## A game"
+    yield (f"The last step of the first game of `{replays[0]}`; "
+           "[watch it step by step](game.html) (a self-contained page).")
+    yield "![the last step of a game](game.png)"
+
+
+def write_report(paths: list[Path], out: Path) -> Path:
+    """Classify the inputs, draw what they allow and write `out`/report.md."""
+    found = classify(paths)
+    out.mkdir(parents=True, exist_ok=True)
+    parts = ["# Report: our runs in the paper's figures and tables"]
+    makers = {"records": _tables_and_fig4, "trials": _fig3, "replays": _fig5_and_game}
+    for kind, maker in makers.items():
+        if found[kind]:
+            parts += list(maker(found[kind], out))
+        else:
+            parts.append(f"_No {kind} among the inputs._")
+    report = out / "report.md"
+    report.write_text("\n\n".join(parts) + "\n")
+    return report

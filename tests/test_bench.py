@@ -1,0 +1,32 @@
+"""`python -m rllib_pommer.bench`: the job runs the measures that live beside the code they
+measure (game/speed.py, agents/speed.py) and compares them with the reference's figures."""
+
+from __future__ import annotations
+
+import json
+
+from rllib_pommer import bench
+from rllib_pommer.agents import speed as agents_speed
+from rllib_pommer.game import speed as game_speed
+
+
+def test_engine_and_agent_runs_measure_whole_games(monkeypatch):
+    monkeypatch.setattr(game_speed, "GAMES_PER_RUN", 2)
+    monkeypatch.setattr(agents_speed, "GAMES_PER_RUN", 2)
+    for run in (game_speed.single_api_run, game_speed.batched_api_run,
+                agents_speed.simple_objects_run, agents_speed.simple_batched_run):
+        steps_per_s, games_per_s = run(0)
+        assert steps_per_s > games_per_s > 0
+
+
+def test_bench_engine_prints_our_speed_beside_the_reference(monkeypatch, capsys):
+    monkeypatch.setattr(game_speed, "GAMES_PER_RUN", 2)
+    monkeypatch.setattr(bench, "RUNS", 2)
+    assert bench.main(["engine", "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    reference = json.loads(bench.REFERENCE_SPEED.read_text())["a_random_env_step"]
+    assert result["reference_steps_per_s"] == reference["steps_per_s"]["median"]
+    for api in ("single", "batched"):
+        assert len(result[f"{api}_steps_per_s_runs"]["runs"]) == 2
+        assert result[f"{api}_ratio"] == result[f"{api}_steps_per_s"] / reference[
+            "steps_per_s"]["median"]
