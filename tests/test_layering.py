@@ -20,8 +20,9 @@ def _loaded(modules: list[str], heavy: tuple[str, ...], then: str = "") -> str:
 
 @pytest.mark.parametrize("modules", [
     ["rllib_pommer.game.engine", "rllib_pommer.game.records", "rllib_pommer.game.verify",
-     "rllib_pommer.game.invariants"],
-    ["rllib_pommer.agents.registry", "rllib_pommer.agents.action_filter"],
+     "rllib_pommer.game.invariants", "rllib_pommer.game.raw_codec"],
+    ["rllib_pommer.agents.registry", "rllib_pommer.agents.action_filter",
+     "rllib_pommer.agents.scripted"],
     ["rllib_pommer.data.collector", "rllib_pommer.data.dagger", "rllib_pommer.data.dataset"],
 ])
 def test_lower_layers_do_not_import_ray_torch_or_gymnasium(modules):
@@ -41,3 +42,17 @@ def test_user_envs_do_not_import_ray_or_torch():
             "pz = rllib_pommer.envs.parallel_env(); pz.reset(seed=0); "
             "pz.step(dict.fromkeys(pz.agents, 0))")
     assert _loaded(["rllib_pommer.envs"], ("ray", "torch"), play) == ""
+
+
+def test_curricula_are_checked_without_ray_or_torch(tmp_path):
+    """The run's names, the seat mapping and the curriculum checker: every shipped curriculum,
+    and one naming a learned policy (its kind's torch code is not needed to check the name)."""
+    learned = tmp_path / "learned.toml"
+    learned.write_text('[[stage]]\nname = "x"\nopponent = "imitation"\nepisodes = 5\n')
+    check = ("from rllib_pommer.rl.curriculum import curriculum_names, load_curriculum\n"
+             "from rllib_pommer.rl.mapping import SeatMapping\n"
+             f"loaded = [load_curriculum(n) for n in curriculum_names() + [{str(learned)!r}]]\n"
+             "assert loaded[-1].stages[0].opponent == 'imitation' and len(loaded) > 3\n"
+             "SeatMapping(0, 'suicide', 'simple')")
+    modules = ["rllib_pommer.rl.names", "rllib_pommer.rl.curriculum", "rllib_pommer.rl.mapping"]
+    assert _loaded(modules, ("ray", "torch", "gymnasium"), check) == ""

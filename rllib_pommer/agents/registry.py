@@ -1,8 +1,13 @@
 """Policies by name: small TOML files in the top-level `policies/` folder, plus filter suffixes.
 
-A policy file holds a `kind` (which factory builds it), a `description`, and any further keys the
-factory needs (e.g. a weights path for learned kinds, registered later with `register_kind`). Data
-files rather than code keep the set of named opponents editable without touching the package.
+A policy file holds a `kind`, a `description`, and any further keys its kind needs (e.g. a
+weights path for learned kinds). Data files rather than code keep the set of named opponents
+editable without touching the package. `KINDS` is the one table of kinds: how each builds its
+agent, which keys its files hold, and which fixed RLlib module plays it in a curriculum (the
+curriculum checker and `rl/fixed_modules.py` read it from here). Scripted kinds come from the
+catalogue of rules (`scripted.RULES`); kinds whose code lies above this layer (torch, Ray) name
+the module that registers their factory (`register_kind`), imported only when an agent of that
+kind is built, so names resolve and curricula check without torch or Ray.
 
 Names follow the paper's table: `X_jitter`, `X_action` and `X_jitter_action` are policy X under the
 Jitter Correction, the Action Filter, or both. The wrappers are always stacked in the order of
@@ -19,7 +24,7 @@ import importlib
 import os
 import sys
 from collections.abc import Callable, Iterable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -28,14 +33,7 @@ from .action_filter import ActionFilter
 from .base import Agent
 from .http_agent import HttpAgent
 from .jitter import JitterCorrection
-from .scripted import (
-    RandomAgent,
-    SimpleAgentNoBomb,
-    SmartRandom,
-    StaticAgent,
-    SuicideTeammate,
-)
-from .simple import SimpleAgent
+from .scripted import RULES
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -69,42 +67,47 @@ class PolicySpec:
     filters: tuple[str, ...] = ()
 
 
-# Policy kind -> factory building a fresh agent from the spec (`params` carries kind options).
-KINDS: dict[str, Callable[[PolicySpec], Agent]] = {
-    "static": lambda spec: StaticAgent(),
-    "random": lambda spec: RandomAgent(),
-    "simple": lambda spec: SimpleAgent(),
-    "simple_nobomb": lambda spec: SimpleAgentNoBomb(),
-    "smart_random": lambda spec: SmartRandom(),
-    "suicide": lambda spec: SuicideTeammate(),
-    "http": HttpAgent.from_spec,
-}
+Factory = Callable[[PolicySpec], Agent]
+KeySpec = Mapping[str, tuple[type, bool]]  # key -> (type, required)
 
 
-# Kinds whose factories live above this layer (torch side), imported when first named, like
-# entry points: this layer names the module but never imports it at import time.
-PLUGIN_KINDS = {
-    "learned": "rllib_pommer.learned",
-    "rllib_checkpoint": "rllib_pommer.rl.checkpoint_policy",
-}
+@dataclass(frozen=True)
+class Kind:
+    """One kind of policy file (module docstring).
+
+    build:  the factory of a fresh agent from the spec; None until `plugin` registers it.
+    plugin: the module that registers `build` (torch or Ray side), imported when first needed.
+    keys:   the keys its files may hold beyond kind and description; None: the factory checks.
+    fixed:  the fixed RLlib module that plays it in a curriculum, "scripted" (the rule of
+            `scripted.RULES`) or "net" (a frozen PommerNet); None: it cannot be one.
+    """
+
+    build: Factory | None
+    plugin: str | None = None
+    keys: KeySpec | None = field(default_factory=dict)
+    fixed: str | None = None
 
 
-# The keys each kind's policy files may hold beyond kind and description, with their types
-# (required ones marked True). Kind "http" checks its own keys (http_agent.py).
-KIND_KEYS: dict[str, dict[str, tuple[type, bool]]] = {
-    **{kind: {} for kind in ("static", "random", "simple", "simple_nobomb", "smart_random",
-                             "suicide")},
-    "learned": {"weights": (str, True), "greedy": (bool, False)},
-    "rllib_checkpoint": {"checkpoint": (str, True), "greedy": (bool, False)},
+def _scripted(agent: type) -> Factory:
+    return lambda spec: agent()
+
+
+KINDS: dict[str, Kind] = {
+    **{kind: Kind(_scripted(rule.agent), fixed="scripted") for kind, rule in RULES.items()},
+    "http": Kind(HttpAgent.from_spec, keys=None),  # http_agent.py checks its own keys
+    "learned": Kind(None, "rllib_pommer.learned",
+                    {"weights": (str, True), "greedy": (bool, False)}, "net"),
+    "rllib_checkpoint": Kind(None, "rllib_pommer.rl.checkpoint_policy",
+                             {"checkpoint": (str, True), "greedy": (bool, False)}, "net"),
 }
 
 
 def _check_params(path: Path, kind: str, params: Mapping[str, Any]) -> None:
     """Unknown keys and values of the wrong type are errors, never ignored or coerced (a
     `greedy = "false"` would otherwise be true)."""
-    if kind not in KIND_KEYS:
+    valid = KINDS[kind].keys
+    if valid is None:
         return
-    valid = KIND_KEYS[kind]
     for key, value in params.items():
         if key not in valid:
             raise ValueError(f"policy file {path}: unknown key {key!r} for kind {kind!r}; "
@@ -118,14 +121,17 @@ def _check_params(path: Path, kind: str, params: Mapping[str, Any]) -> None:
         raise ValueError(f"policy file {path}: kind {kind!r} needs key {missing[0]!r}")
 
 
-def _ensure_kind(kind: str) -> None:
-    if isinstance(kind, str) and kind in PLUGIN_KINDS and kind not in KINDS:
-        importlib.import_module(PLUGIN_KINDS[kind])
+def _factory(kind: str) -> Factory:
+    """The factory of `kind`, importing the module that registers it the first time."""
+    if KINDS[kind].build is None:
+        importlib.import_module(KINDS[kind].plugin)
+    return KINDS[kind].build
 
 
-def register_kind(kind: str, factory: Callable[[PolicySpec], Agent]) -> None:
-    """Make policy files with `kind = "<kind>"` buildable (e.g. learned policies)."""
-    KINDS[kind] = factory
+def register_kind(kind: str, factory: Factory) -> None:
+    """Make policy files with `kind = "<kind>"` buildable: a plugin kind's factory (learned
+    policies), or a new kind whose factory checks its own keys."""
+    KINDS[kind] = replace(KINDS[kind], build=factory) if kind in KINDS else Kind(factory, keys=None)
 
 
 def policies_dir() -> Path:
@@ -144,7 +150,6 @@ def _load_spec(path: Path, filters: tuple[str, ...]) -> PolicySpec:
     except tomllib.TOMLDecodeError as exc:
         raise ValueError(f"policy file {path}: invalid TOML ({exc})") from None
     kind = data.pop("kind", None)
-    _ensure_kind(kind)
     if not isinstance(kind, str) or kind not in KINDS:
         raise ValueError(f"policy file {path}: kind {kind!r} is not one of {sorted(KINDS)}")
     description = data.pop("description", "")
@@ -164,7 +169,6 @@ def resolve_policy(name_or_path: str | os.PathLike) -> PolicySpec:
     if _looks_like_path(name_or_path):
         path = Path(name_or_path)
         if path.is_dir():  # a PPO run, trial or checkpoint folder: play its learner
-            _ensure_kind("rllib_checkpoint")
             return PolicySpec(path.name, "rllib_checkpoint", f"learner of {path}", path,
                               {"checkpoint": str(path.resolve())})
         if not path.is_file():
@@ -196,7 +200,7 @@ def make_agent(name_or_path: str | os.PathLike, filters: Iterable[str] = ()) -> 
         raise ValueError(f"unknown filter(s) {unknown}; valid: {list(FILTERS)}")
     spec = resolve_policy(name_or_path)
     wanted = set(spec.filters) | set(filters)
-    agent = KINDS[spec.kind](spec)
+    agent = _factory(spec.kind)(spec)
     for filter_name, wrapper in FILTERS.items():
         if filter_name in wanted:
             agent = wrapper(agent)

@@ -21,9 +21,9 @@ episode's filters replay with its seed. `set_stage` changes reward mode and filt
 
 What an agent observes is the config's `observation` form (`OBSERVATIONS`): "dict", the default
 the training uses, holds "planes" (the paper's 19 float planes the networks read) and "raw" (the
-`Observation` packed into one int16 vector, from which scripted modules and the action filter
-rebuild the exact arrays the compiled agents take, `unpack_raw`), so any policy can sit in any
-seat; "planes" is the 19 planes alone, as a Box; "planes_last" the same planes channels-last
+`Observation` packed into one int16 vector by `game/raw_codec.py`, from which scripted modules
+and the action filter rebuild the exact arrays the compiled agents take), so any policy can sit in
+any seat; "planes" is the 19 planes alone, as a Box; "planes_last" the same planes channels-last
 (11, 11, 19), the layout RLlib's default CNN encoder reads.
 """
 
@@ -38,18 +38,13 @@ import numpy as np
 from ..features import NUM_PLANES, featurize
 from ..game.constants import NUM_ACTIONS, NUM_AGENTS, TEAM, Result
 from ..game.engine import Game
-from ..game.observation import Observation, empty_observations
+from ..game.observation import Observation
+from ..game.raw_codec import RAW_SIZE, pack_raw
+from ..rl.names import REWARD_MODES
 from ..viz.frames import state_frame
 from ..viz.render import draw_frame
 
-REWARD_MODES = ("shaped", "raw")
 RENDER_MODES = ["rgb_array"]  # of the PettingZoo and Gymnasium envs: `MultiAgentTeam.draw`
-
-_TEMPLATE = empty_observations(1).select(0, 0)
-_FIELD_SHAPES = [np.shape(field) for field in _TEMPLATE]
-_FIELD_SIZES = [int(np.prod(shape)) for shape in _FIELD_SHAPES]
-RAW_SIZE = sum(_FIELD_SIZES)
-_SPLITS = np.cumsum(_FIELD_SIZES)[:-1]
 
 PLANES_SPACE = gym.spaces.Box(0.0, 1.0, (NUM_PLANES, 11, 11), np.float32)
 OBSERVATION_SPACE = gym.spaces.Dict({
@@ -57,23 +52,6 @@ OBSERVATION_SPACE = gym.spaces.Dict({
     "raw": gym.spaces.Box(0, np.iinfo(np.int16).max, (RAW_SIZE,), np.int16),
 })
 ACTION_SPACE = gym.spaces.Discrete(NUM_ACTIONS)
-
-
-def pack_raw(obs: Observation) -> np.ndarray:
-    """Observations of leading shape L -> int16 (L..., RAW_SIZE)."""
-    lead = obs.board.shape[:-2]
-    return np.concatenate(
-        [np.asarray(f).reshape(lead + (-1,)).astype(np.int16) for f in obs], axis=-1)
-
-
-def unpack_raw(raw: np.ndarray) -> Observation:
-    """The inverse of `pack_raw`, with the engine's dtypes, for any leading shape."""
-    raw = np.asarray(raw)
-    lead = raw.shape[:-1]
-    parts = np.split(raw, _SPLITS, axis=-1)
-    return Observation(*(
-        part.reshape(lead + shape).astype(np.asarray(template).dtype)
-        for part, shape, template in zip(parts, _FIELD_SHAPES, _TEMPLATE, strict=True)))
 
 
 def _dict_rows(obs: Observation) -> list[dict[str, np.ndarray]]:

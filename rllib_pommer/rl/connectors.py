@@ -24,8 +24,8 @@ from ray.rllib.core.columns import Columns
 from ..agents.action_filter import ActionFilter
 from ..agents.jitter import JitterCorrection
 from ..game.constants import TEAM
-from .env import unpack_raw
-from .rl_module import LEARNER
+from ..game.raw_codec import unpack_raw
+from .names import LEARNER
 
 FILTERS_KEY = "learner_filters"
 

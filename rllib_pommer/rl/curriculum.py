@@ -17,8 +17,10 @@ the stages in order::
     freeze_pi = true
 
 A stage lasts `episodes` lifetime episodes (counted over all env runners). Policies are names from
-`policies/` (scripted kinds, or frozen learned / RLlib-checkpoint policies). Every error names the
-file, the key and the valid choices, so a typo fails before Ray starts.
+`policies/` whose kind has a fixed RLlib module (`agents/registry.KINDS`: scripted kinds, or frozen
+learned / RLlib-checkpoint policies). Every error names the file, the key and the valid choices,
+so a typo fails before Ray starts: this module imports neither Ray nor torch
+(tests/test_layering.py checks a whole load in a fresh interpreter).
 """
 
 from __future__ import annotations
@@ -29,9 +31,9 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
-from ..agents.registry import policies_dir, policy_names, resolve_policy
+from ..agents.registry import KINDS, policies_dir, policy_names, resolve_policy
 from ..shipped import data_dir
-from .env import REWARD_MODES
+from .names import REWARD_MODES
 from .settings import PPOSettings
 
 if sys.version_info >= (3, 11):
@@ -39,8 +41,6 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-SCRIPTED_KINDS = ("static", "random", "simple", "simple_nobomb", "smart_random", "suicide")
-NET_KINDS = ("learned", "rllib_checkpoint")
 TOP_KEYS = ("name", "description", "pi_weights", "max_steps", "ppo", "defaults", "stage")
 
 
@@ -149,10 +149,11 @@ def _check_policy(where: str, name: Any) -> None:
         spec = resolve_policy(name)
     except ValueError:
         raise ValueError(f"{where}: unknown policy {name!r}; valid: {policy_names()}") from None
-    if spec.filters or spec.kind not in SCRIPTED_KINDS + NET_KINDS:
+    if spec.filters or KINDS[spec.kind].fixed is None:
+        fixed = [kind for kind, entry in KINDS.items() if entry.fixed]
         raise ValueError(f"{where}: policy {name!r} cannot be a fixed module (kind {spec.kind!r}, "
                          f"filters {list(spec.filters)}); valid: {policy_names()} without "
-                         f"filter suffixes, of kinds {list(SCRIPTED_KINDS + NET_KINDS)}")
+                         f"filter suffixes, of kinds {fixed}")
 
 
 def _stage(where: str, table: dict) -> Stage:

@@ -5,8 +5,8 @@ The game, its observations and rewards are `envs.team.MultiAgentTeam` (no Ray, s
 PettingZoo and Gymnasium envs; its docstring says what agents observe and earn); this module adds
 RLlib's base class and the registration. The training uses the default "dict" observation, so any
 policy can sit in any seat; `env_config={"observation": "planes_last"}` gives the planes alone as
-a Box, for RLlib's default model. The names below stay importable from here, where the RL modules
-and older code import them.
+a Box, for RLlib's default model. The raw codec (`game/raw_codec.py`) and the run's names
+(`names.py`) stay importable from here, where older code and notebooks import them.
 """
 
 from __future__ import annotations
@@ -14,21 +14,12 @@ from __future__ import annotations
 from ray.rllib.env.multi_agent_env import MultiAgentEnv
 from ray.tune.registry import register_env
 
-from ..envs.team import (
-    ACTION_SPACE,
-    OBSERVATION_SPACE,
-    RAW_SIZE,
-    REWARD_MODES,
-    MultiAgentTeam,
-    agent_observations,
-    pack_raw,
-    unpack_raw,
-)
+from ..envs.team import ACTION_SPACE, OBSERVATION_SPACE, MultiAgentTeam, agent_observations
+from ..game.raw_codec import RAW_SIZE, pack_raw, unpack_raw
+from .names import ENV_NAME, REWARD_MODES
 
 __all__ = ["ACTION_SPACE", "ENV_NAME", "OBSERVATION_SPACE", "RAW_SIZE", "REWARD_MODES",
            "PommeEnv", "agent_observations", "pack_raw", "unpack_raw"]
-
-ENV_NAME = "pommerman_team"
 
 
 class PommeEnv(MultiAgentTeam, MultiAgentEnv):

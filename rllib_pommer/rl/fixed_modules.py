@@ -1,13 +1,17 @@
 """Fixed (never trained) modules: the teammate and the league of opponents, one per policy name.
 
-Scripted policies run the compiled agents on each row's `Observation`, rebuilt from the "raw" part
-of the observation. Whatever an agent remembers between steps (SimpleAgent's recent cells,
-previous direction and random stream; the random stream of Random and SmartRandom) is carried in
-RLlib's per-agent episode state (STATE_IN -> STATE_OUT, rllib-notes K1), packed into one int64
-vector, so the module itself holds nothing that the learner-to-runner weight sync could overwrite,
-and an episode split over several `sample()` calls keeps its memory. A row's stream is seeded on
-its first step from a hash of its first observation (board layout and seat), so seeded episodes
-replay exactly. Static and Suicide need no memory (Suicide bombs at step 0) and are stateless.
+Which module plays a policy is its kind's `fixed` entry in the one table of kinds
+(`agents/registry.KINDS`). Scripted policies run their kind's rule from the catalogue
+(`agents/scripted.RULES`, the very function the arena's agents call) on the batch's rows, each
+rebuilt from the "raw" part of the observation (`game/raw_codec.py`). Whatever a rule remembers
+between steps (SimpleAgent's recent cells, previous direction and random stream; the random
+stream of Random and SmartRandom) is carried in RLlib's per-agent episode state (STATE_IN ->
+STATE_OUT, rllib-notes K1), packed into one int64 vector, so the module itself holds nothing that
+the learner-to-runner weight sync could overwrite, and an episode split over several `sample()`
+calls keeps its memory. A row's stream is seeded on its first step from a hash of its first
+observation (board layout and seat), so seeded episodes replay exactly; a row whose state arrives
+already marked seeded keeps its stream (the arena cross-test seeds it as the arena would). Rules
+that remember nothing (Static, Suicide) make stateless modules.
 
 Learned and RLlib-checkpoint policies are frozen `PommerNet`s that act by sampling (or greedily,
 per their policy file) on the "planes".
@@ -23,17 +27,13 @@ from ray.rllib.core.rl_module import RLModule
 from ray.rllib.core.rl_module.rl_module import RLModuleSpec
 from ray.rllib.core.rl_module.torch import TorchRLModule
 
-from ..agents.action_filter import safe_actions
-from ..agents.registry import resolve_policy
-from ..agents.rng import next_below
-from ..agents.simple import RECENT_LENGTH, SimpleMemory, simple_actions
-from ..game.constants import NUM_ACTIONS, Action
+from ..agents.registry import KINDS, resolve_policy
+from ..agents.scripted import RULES
+from ..agents.simple import RECENT_LENGTH, SimpleMemory
+from ..game.raw_codec import unpack_raw
 from ..learned import load_policy_net
 from .checkpoint_policy import checkpoint_path, load_checkpoint_net
-from .env import unpack_raw
 
-STATEFUL_KINDS = ("simple", "simple_nobomb", "random", "smart_random")
-STATELESS_KINDS = ("static", "suicide")
 # Packed memory: recent cells (6 x 2), recent_len, prev_dir, rng state (uint64 bits), seeded flag.
 _RECENT = 2 * RECENT_LENGTH
 MEMORY_SIZE = _RECENT + 4
@@ -76,47 +76,17 @@ def pack_memory(memory: SimpleMemory) -> np.ndarray:
     ], axis=1)
 
 
-def _simple(obs, memory):
-    return simple_actions(obs, memory)
-
-
-def _simple_nobomb(obs, memory):
-    actions = simple_actions(obs, memory)
-    actions[actions == Action.BOMB] = Action.STOP
-    return actions
-
-
-def _random(obs, memory):
-    return np.array([next_below(memory.rng, m, NUM_ACTIONS) for m in range(len(memory.rng))])
-
-
-def _smart_random(obs, memory):
-    actions = np.empty(len(memory.rng), np.int64)
-    for m in range(len(actions)):
-        candidates = np.flatnonzero(safe_actions(obs.select(m)))
-        if candidates.size == 0:
-            candidates = np.arange(NUM_ACTIONS)
-        actions[m] = candidates[next_below(memory.rng, m, candidates.size)]
-    return actions
-
-
-# Kind -> (observation rows, memory rows updated in place) -> actions; same rules as the
-# Agent classes in `agents/` (random draws come from the splitmix stream in the memory).
-STATEFUL_RULES = {"simple": _simple, "simple_nobomb": _simple_nobomb, "random": _random,
-                  "smart_random": _smart_random}
-
-
 class ScriptedModule(RLModule):
-    """model_config: {"kind": one of STATEFUL_KINDS + STATELESS_KINDS, "max_seq_len": ...}."""
+    """model_config: {"kind": a kind of `agents/scripted.RULES`, "max_seq_len": ...}."""
 
     def setup(self):
         self.kind = self.model_config["kind"]
-        if self.kind not in STATEFUL_KINDS + STATELESS_KINDS:
-            raise ValueError(f"scripted module kind {self.kind!r} is not one of "
-                             f"{list(STATEFUL_KINDS + STATELESS_KINDS)}")
+        if self.kind not in RULES:
+            raise ValueError(f"scripted module kind {self.kind!r} is not one of {list(RULES)}")
+        self.rule = RULES[self.kind]
 
     def is_stateful(self) -> bool:
-        return self.kind in STATEFUL_KINDS
+        return self.rule.remembers
 
     def get_initial_state(self) -> dict:
         return {"memory": np.zeros(MEMORY_SIZE, np.int64)} if self.is_stateful() else {}
@@ -124,13 +94,10 @@ class ScriptedModule(RLModule):
     def _act(self, batch, **kwargs):
         raw = _numpy(batch[Columns.OBS]["raw"])
         if not self.is_stateful():
-            obs = unpack_raw(raw)
-            first = obs.step_count == 0
-            bomb = first if self.kind == "suicide" else np.zeros_like(first)
-            return {Columns.ACTIONS: np.where(bomb, int(Action.BOMB), int(Action.STOP))}
+            return {Columns.ACTIONS: self.rule.actions(unpack_raw(raw), None)}
         raw = raw[:, -1]  # stateful modules get a time rank of 1
         memory = unpack_memory(_numpy(batch[Columns.STATE_IN]["memory"]), raw)
-        actions = STATEFUL_RULES[self.kind](unpack_raw(raw), memory)
+        actions = self.rule.actions(unpack_raw(raw), memory)
         return {Columns.ACTIONS: np.asarray(actions, np.int64),
                 Columns.STATE_OUT: {"memory": pack_memory(memory)}}
 
@@ -169,7 +136,7 @@ class FrozenNetModule(TorchRLModule):
 def fixed_module_spec(policy: str) -> RLModuleSpec:
     """The module spec playing policy `policy` (validated by the curriculum loader)."""
     kind = resolve_policy(policy).kind
-    if kind in STATEFUL_KINDS + STATELESS_KINDS:
+    if KINDS[kind].fixed == "scripted":
         return RLModuleSpec(module_class=ScriptedModule,
                             model_config={"kind": kind, "max_seq_len": MAX_SEQ_LEN})
     return RLModuleSpec(module_class=FrozenNetModule, model_config={"policy": policy})

@@ -38,8 +38,7 @@ from ray.rllib.core.rl_module.torch import TorchRLModule
 
 from ..learned import load_policy_net
 from ..network import PommerNet
-
-LEARNER = "learner"
+from .names import LEARNER  # noqa: F401  (its module id, long imported from here)
 
 
 class PommerPPOModule(TorchRLModule, ValueFunctionAPI):

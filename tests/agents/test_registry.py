@@ -128,14 +128,14 @@ def test_new_kinds_can_be_registered_with_parameters(tmp_path, monkeypatch):
         seen.update(spec.params)
         return SuicideTeammate() if spec.params["brave"] else SmartRandom()
 
-    monkeypatch.setitem(registry.KINDS, "custom", build)
+    monkeypatch.setitem(registry.KINDS, "custom", registry.Kind(build, keys=None))
     path = tmp_path / "ppo.toml"
     path.write_text('kind = "custom"\ndescription = "weights"\nbrave = true\nsteps = 3\n')
     assert isinstance(make_agent(path), SuicideTeammate)
     assert seen == {"brave": True, "steps": 3}
     monkeypatch.delitem(registry.KINDS, "custom")
     registry.register_kind("custom", build)
-    assert registry.KINDS["custom"] is build
+    assert registry.KINDS["custom"] == registry.Kind(build, keys=None)
     monkeypatch.delitem(registry.KINDS, "custom")
 
 

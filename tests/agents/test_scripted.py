@@ -13,13 +13,14 @@ from rllib_pommer.agents.action_filter import ActionFilter, safe_actions
 from rllib_pommer.agents.base import Agent
 from rllib_pommer.agents.jitter import JitterCorrection
 from rllib_pommer.agents.scripted import (
+    RULES,
     RandomAgent,
     SimpleAgentNoBomb,
     SmartRandom,
     StaticAgent,
     SuicideTeammate,
 )
-from rllib_pommer.agents.simple import SimpleAgent
+from rllib_pommer.agents.simple import SimpleAgent, SimpleMemory
 from rllib_pommer.game.constants import Action, Item
 from rllib_pommer.game.observation import Observation, empty_observations
 from rllib_pommer.game.serialize import load_observation
@@ -108,12 +109,16 @@ def test_random_agent_is_uniform_and_seeded():
     assert play(5, 50) == play(5, 50) != play(6, 50)
 
 
-def test_suicide_teammate_bombs_first_then_stops():
+def test_suicide_teammate_bombs_on_the_first_step_then_stops():
     agent = SuicideTeammate()
     obs = random_observation(np.random.default_rng(0))
     for _ in range(2):  # and again after a reset
         agent.reset(2, 2, np.random.default_rng(0))
-        assert [agent.act(obs) for _ in range(12)] == [Action.BOMB] + [Action.STOP] * 11
+        actions = []
+        for step in range(12):
+            obs.step_count[...] = step
+            actions.append(agent.act(obs))
+        assert actions == [Action.BOMB] + [Action.STOP] * 11
 
 
 def test_smart_random_picks_only_safe_actions():
@@ -139,3 +144,25 @@ def test_simple_nobomb_is_simple_agent_with_stop_for_bomb():
     nobomb_actions = [nobomb.act(obs) for obs in observations]
     assert Action.BOMB in simple_actions
     assert nobomb_actions == [Action.STOP if a == Action.BOMB else a for a in simple_actions]
+
+
+@pytest.mark.parametrize("kind", list(RULES))
+def test_each_agent_class_plays_its_kinds_batched_rule(kind):
+    """Four agents of a kind, one per seat of a recorded game, against the catalogue's rule
+    on the four rows at once, whose memory rows start as the agents' own: same actions."""
+    seats = [recorded_observations(agent_id) for agent_id in range(4)]
+    agents = [RULES[kind].agent() for _ in seats]
+    for agent_id, agent in enumerate(agents):
+        agent.reset(agent_id, 2, np.random.default_rng(agent_id))
+    memory = None
+    if RULES[kind].remembers:
+        rows = zip(*(agent.memory for agent in agents), strict=True)
+        memory = SimpleMemory(*(np.concatenate(row) for row in rows))
+    played = []
+    for step in zip(*seats, strict=True):
+        rows = Observation(*(np.stack(fields) for fields in zip(*step, strict=True)))
+        batched = RULES[kind].actions(rows, memory).tolist()
+        assert batched == [agent.act(obs) for agent, obs in zip(agents, step, strict=True)]
+        played += batched
+    fixed_sets = {"static": {Action.STOP}, "suicide": {Action.STOP, Action.BOMB}}
+    assert set(played) == fixed_sets[kind] if kind in fixed_sets else len(set(played)) > 3

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 from ray.rllib.utils.pre_checks.env import check_multiagent_environments
 
-from rllib_pommer.rl.env import PommeEnv, pack_raw, unpack_raw
+from rllib_pommer.rl.env import PommeEnv
 from rllib_pommer.rl.pettingzoo_env import PommeParallelEnv
 
 
@@ -50,13 +50,6 @@ def test_same_seed_same_episode():
     for (o_a, r_a, *_), (o_b, r_b, *_) in zip(hist_a, hist_b, strict=True):
         assert r_a == r_b
         assert all(np.array_equal(o_a[k]["raw"], o_b[k]["raw"]) for k in o_a)
-
-
-def test_raw_observation_round_trip():
-    obs = PommeEnv().game.reset(3)
-    again = unpack_raw(pack_raw(obs))
-    for field, back in zip(obs, again, strict=True):
-        assert np.array_equal(field, back) and back.dtype == field.dtype
 
 
 def test_dead_agents_leave_with_final_reward_and_shaping():

@@ -1,14 +1,25 @@
-"""Scripted modules carry SimpleAgent's memory through RLlib state and act as the kernel does."""
+"""Scripted modules carry their rule's memory through RLlib state and play every scripted kind as
+the arena's agents do."""
 
 from __future__ import annotations
 
 import numpy as np
+import pytest
 import torch
 from ray.rllib.core.columns import Columns
 
+from rllib_pommer.agents.scripted import RULES
 from rllib_pommer.agents.simple import new_memory, simple_actions
-from rllib_pommer.rl.env import ACTION_SPACE, OBSERVATION_SPACE, PommeEnv, unpack_raw
-from rllib_pommer.rl.fixed_modules import ScriptedModule, _seed_streams
+from rllib_pommer.arena import MatchSpec, record_games, seats_of_team_a
+from rllib_pommer.game.seeding import game_seeds
+from rllib_pommer.rl.env import (
+    ACTION_SPACE,
+    OBSERVATION_SPACE,
+    PommeEnv,
+    agent_observations,
+    unpack_raw,
+)
+from rllib_pommer.rl.fixed_modules import ScriptedModule, _seed_streams, pack_memory
 
 
 def _module(kind):
@@ -50,3 +61,50 @@ def test_stateless_kinds():
     assert not _module("suicide").is_stateful()
     assert _module("suicide").forward_inference(batch)[Columns.ACTIONS].tolist() == [5, 5]
     assert _module("static").forward_inference(batch)[Columns.ACTIONS].tolist() == [0, 0]
+
+
+def _module_actions(module, raws, states):
+    """The module's actions for some seats' raw observations, with RLlib's state round trip."""
+    raw = torch.from_numpy(np.stack(raws))
+    if not module.is_stateful():
+        return module.forward_exploration({Columns.OBS: {"raw": raw}})[Columns.ACTIONS], states
+    out = module.forward_exploration({
+        Columns.OBS: {"raw": raw[:, None]},
+        Columns.STATE_IN: {"memory": torch.from_numpy(np.stack(states))}})
+    return out[Columns.ACTIONS], list(out[Columns.STATE_OUT]["memory"])
+
+
+@pytest.mark.parametrize("kind", list(RULES))
+def test_every_scripted_kind_plays_the_arenas_game_in_the_rllib_env(kind):
+    """The arena's recorded game of `kind` (team A) against another scripted kind, played again
+    in the RLlib env by scripted modules whose rows start from the random streams the arena's
+    agents drew from the same match seed: every action of every step, and the outcome, agree."""
+    vs = "random" if kind == "simple" else "simple"
+    spec = MatchSpec(kind, vs, games=2, seed=11)
+    for game, replay in enumerate(record_games(spec, spec.games)):  # A on {0, 2}, then {1, 3}
+        board_seed, generators = game_seeds(spec.seed, game)
+        seats_a = seats_of_team_a(spec, game)
+        policy = [kind if seat in seats_a else vs for seat in range(4)]
+        modules = {name: _module(name) for name in set(policy)}
+        # What the arena's agent drew in reset: one stream from its seat's generator.
+        states = [pack_memory(new_memory(1, generators[seat]))[0] for seat in range(4)]
+        env = PommeEnv({"seed": 0})
+        env.reset(seed=0)
+        env.last_observation = env.game.reset(board_seed)
+        obs = agent_observations(env.last_observation)
+        for t, step in enumerate(replay["steps"]):
+            actions = {}
+            for name, module in modules.items():
+                seats = [seat for seat in env.agents if policy[seat] == name]  # not the dead
+                if seats:
+                    chosen, new = _module_actions(module, [obs[s]["raw"] for s in seats],
+                                                  [states[s] for s in seats])
+                    actions |= dict(zip(seats, np.asarray(chosen).tolist(), strict=True))
+                    for seat, state in zip(seats, new, strict=True):
+                        states[seat] = np.asarray(state)
+            recorded = {seat: step["actions"][seat] for seat in actions}
+            assert actions == recorded, f"{kind} vs {vs}, game {game}, step {t}"
+            obs, _, terminateds, _, infos = env.step(actions)
+        assert terminateds["__all__"]
+        assert sorted(next(iter(infos.values()))["winners"]) == sorted(
+            replay["final_info"].get("winners", []))

@@ -1,7 +1,8 @@
 """A checkpoint is self-contained: the committed campaign's checkpoint, made before this was so,
-restores (module alone and whole algorithm, with its pickled curriculum callback) where the
-imitation weights file it names no longer exists. (A packed run moved, resumed and played without
-its weights file: test_resume.py.)"""
+restores (module alone and whole algorithm, with its pickled curriculum callback, seat mapping and
+fixed modules, all stored by import path) where the imitation weights file it names no longer
+exists, and plays episodes. (A packed run moved, resumed and played without its weights file:
+test_resume.py.)"""
 
 from __future__ import annotations
 
@@ -40,7 +41,9 @@ try:
         "weights_visible": weights.exists(), "module_pi": same(module.pi),
         "module_source": module.pi_source, "algo_pi": same(learner.pi),
         "algo_source": learner.pi_source, "pi_frozen": learner.pi_frozen,
-        "mapping_stage": algo.env_runner.config.policy_mapping_fn.stage}))
+        "mapping_stage": algo.env_runner.config.policy_mapping_fn.stage,
+        "played": sorted({e.module_id for episode in algo.env_runner.sample(
+            num_timesteps=300, explore=True) for e in episode.agent_episodes.values()})}))
     algo.stop()
 finally:
     ray.shutdown()
@@ -81,7 +84,9 @@ def test_the_committed_campaign_checkpoint_restores_without_its_weights_file(tmp
     seen = json.loads(done.stdout.strip().splitlines()[-1])
     assert seen == {"weights_visible": False, "module_pi": True, "module_source": "checkpoint",
                     "algo_pi": True, "algo_source": "checkpoint",
-                    "pi_frozen": True, "mapping_stage": 0}  # in the value warm-up, as it was
+                    "pi_frozen": True, "mapping_stage": 0,  # in the value warm-up, as it was
+                    # and it plays: its scripted modules, restored by their import paths
+                    "played": ["learner", "simple", "suicide"]}
 
 
 def test_the_module_takes_pi_from_the_weights_or_a_checkpoint_and_never_trains_without(

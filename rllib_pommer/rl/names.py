@@ -1,0 +1,13 @@
+"""Names a training run shares with its data files and envs, importable without Ray or torch.
+
+A curriculum file is checked (`curriculum.load_curriculum`) and a stage's seats are mapped
+(`mapping.SeatMapping`) with these names alone, so neither needs Ray; the env (`envs/team.py`)
+validates its reward mode against the same tuple the curriculum checker offers.
+"""
+
+from __future__ import annotations
+
+LEARNER = "learner"  # module id of the trained policy; fixed modules are named by their policy
+ENV_NAME = "pommerman_team"  # the RLlib env's registered name (rl/env.py)
+# How an agent's last step is paid (envs/team.MultiAgentTeam): the paper's shaping, or the engine's.
+REWARD_MODES = ("shaped", "raw")
