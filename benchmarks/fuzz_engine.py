@@ -17,7 +17,7 @@ import numpy as np
 from numba import njit
 from tqdm import tqdm
 
-from rllib_pommer.game.constants import FFA, TEAM
+from rllib_pommer.game.constants import FFA_PRESET, TEAM_PRESET
 from rllib_pommer.game.engine import Games
 from rllib_pommer.game.invariants import VIOLATIONS, step_violation
 from rllib_pommer.game.state import A_AMMO, A_KICK, M_BOMBS, M_DONE, M_ITEMS
@@ -84,7 +84,7 @@ def main() -> int:
     start = time.perf_counter()
     total, failures = 0, []
     with tqdm(total=args.steps, unit="step", unit_scale=True, mininterval=2) as bar:
-        for config in (TEAM, FFA):
+        for config in (TEAM_PRESET, FFA_PRESET):
             steps, found = fuzz(config, args.games, args.steps // 2, rng, bar)
             total += steps
             failures += found

@@ -26,7 +26,7 @@ from .agents.base import innermost
 from .agents.http_agent import HttpAgent
 from .agents.registry import make_agent
 from .game.blast import mark_blast
-from .game.constants import TEAM, Action
+from .game.constants import TEAM_PRESET, Action
 from .game.engine import Games
 from .game.records import GameRecorder
 from .game.seeding import game_seeds
@@ -170,13 +170,13 @@ def _play_chunk(spec: MatchSpec, games: Sequence[int],
     torch_threads_for_workers()
     n = len(games)
     seeds = [game_seeds(spec.seed, g) for g in games]
-    engine = Games(n, TEAM)
+    engine = Games(n, TEAM_PRESET)
     engine.reset([board_seed for board_seed, _ in seeds])
     players = []
     for i, g in enumerate(games):
         agents = _build_players(spec, seats_of_team_a(spec, g))
         for seat, agent in enumerate(agents):
-            agent.reset(seat, int(TEAM.game_type), seeds[i][1][seat])
+            agent.reset(seat, int(TEAM_PRESET.game_type), seeds[i][1][seat])
         players.append(agents)
     recorders = {}
     if replay_observations is not None:

@@ -12,7 +12,7 @@ import time
 
 import numpy as np
 
-from ..game.constants import NUM_AGENTS, TEAM
+from ..game.constants import NUM_AGENTS, TEAM_PRESET
 from ..game.engine import Game, Games
 from ..game.state import A_ALIVE
 from .simple import SimpleAgent, new_memory, simple_actions
@@ -29,11 +29,11 @@ def simple_objects_run(run: int) -> tuple[float, float]:
     start = time.perf_counter()
     steps = 0
     for seed in _seeds(run):
-        game = Game(TEAM)
+        game = Game(TEAM_PRESET)
         obs = game.reset(seed)
         agents = [SimpleAgent() for _ in range(NUM_AGENTS)]
         for seat, agent in enumerate(agents):
-            agent.reset(seat, int(TEAM.game_type), np.random.default_rng([seed, seat]))
+            agent.reset(seat, int(TEAM_PRESET.game_type), np.random.default_rng([seed, seat]))
         done = False
         while not done:
             alive = game.state.agents[0, :, A_ALIVE] != 0
@@ -47,7 +47,7 @@ def simple_objects_run(run: int) -> tuple[float, float]:
 def simple_batched_run(run: int) -> tuple[float, float]:
     """Protocol (b) with the batched engine and one batched SimpleAgent call per step."""
     start = time.perf_counter()
-    games = Games(GAMES_PER_RUN, TEAM)
+    games = Games(GAMES_PER_RUN, TEAM_PRESET)
     games.reset(_seeds(run))
     memory = new_memory(NUM_AGENTS * GAMES_PER_RUN, np.random.default_rng(run))
     steps = 0

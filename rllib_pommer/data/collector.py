@@ -23,7 +23,7 @@ from pathlib import Path
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from ..game.constants import TEAM
+from ..game.constants import TEAM_PRESET
 from ..parallel import map_unordered
 from .dagger import check_setup, play_dagger_games
 from .expert import play_games
@@ -76,7 +76,7 @@ def plan_shards(games: int, seed: int, shard_games: int, label_draws: int = 0,
         _, weights = greedy_actor(dagger.policy)
         players = {"agents": "dagger", "policy": dagger.policy,
                    "policy_sha256": _sha256(weights), "opponents": ",".join(dagger.opponents)}
-    return ShardPlan(games, ShardMeta(seed, 0, 0, shard_games, TEAM.board_size,
+    return ShardPlan(games, ShardMeta(seed, 0, 0, shard_games, TEAM_PRESET.board_size,
                                       label_draws=label_draws, **players))
 
 

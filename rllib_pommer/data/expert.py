@@ -15,7 +15,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..agents.simple import SimpleMemory, new_memory, simple_action_counts, simple_actions
-from ..game.constants import NUM_ACTIONS, NUM_AGENTS, TEAM
+from ..game.constants import NUM_ACTIONS, NUM_AGENTS, TEAM_PRESET
 from ..game.engine import Games
 from ..game.seeding import game_seeds
 from .schema import Samples
@@ -37,7 +37,7 @@ class GameSlots:
 
     def __init__(self, seed: int, games: range, batch_games: int,
                  on_start: Callable[[int, int], None] | None = None):
-        self.engine = Games(min(batch_games, len(games)), TEAM)
+        self.engine = Games(min(batch_games, len(games)), TEAM_PRESET)
         slots = self.engine.num_games
         self.memory = new_memory(NUM_AGENTS * slots, np.random.default_rng(0))  # reseeded
         self.game = np.full(slots, -1, np.int64)

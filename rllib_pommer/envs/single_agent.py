@@ -24,7 +24,7 @@ from copy import deepcopy
 import gymnasium as gym
 
 from ..agents.registry import make_agent
-from ..game.constants import NUM_AGENTS, TEAM
+from ..game.constants import NUM_AGENTS, TEAM_PRESET
 from .team import ACTION_SPACE, RENDER_MODES, MultiAgentTeam, check_render_mode
 
 ENV_ID = "rllib_pommer/PommeTeam-v0"
@@ -60,7 +60,7 @@ class PommeTeamEnv(gym.Env):
         obs, infos = self.team.reset(seed=int(self.np_random.integers(2**63)))
         for (s, agent), rng in zip(self.others.items(), self.np_random.spawn(len(self.others)),
                                    strict=True):
-            agent.reset(s, int(TEAM.game_type), rng)
+            agent.reset(s, int(TEAM_PRESET.game_type), rng)
         return obs[self.seat], infos[self.seat]
 
     def step(self, action):

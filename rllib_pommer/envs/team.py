@@ -36,7 +36,7 @@ import gymnasium as gym
 import numpy as np
 
 from ..features import NUM_PLANES, featurize
-from ..game.constants import NUM_ACTIONS, NUM_AGENTS, TEAM, Result
+from ..game.constants import NUM_ACTIONS, NUM_AGENTS, TEAM_PRESET, Result
 from ..game.engine import Game
 from ..game.observation import Observation
 from ..game.raw_codec import RAW_SIZE, pack_raw
@@ -92,7 +92,8 @@ class MultiAgentTeam:
     def __init__(self, config: dict | None = None):
         super().__init__()  # rl/env.PommeEnv puts RLlib's MultiAgentEnv next in line
         config = dict(config or {})
-        self.game = Game(replace(TEAM, max_steps=int(config.get("max_steps", TEAM.max_steps))))
+        max_steps = int(config.get("max_steps", TEAM_PRESET.max_steps))
+        self.game = Game(replace(TEAM_PRESET, max_steps=max_steps))
         self.observation_form = config.get("observation", "dict")
         if self.observation_form not in OBSERVATIONS:
             raise ValueError(f"env config: observation {self.observation_form!r} is not one of "

@@ -98,10 +98,11 @@ class GameConfig:
         return self.view_radius if self.view_radius > 0 else 10
 
 
-TEAM = GameConfig("team", "PommeTeamCompetition-v0", GameType.TEAM, view_radius=4)
-FFA = GameConfig("ffa", "PommeFFACompetition-v0", GameType.FFA)
-PRESETS = {"team": TEAM, "ffa": FFA}
-CONFIG_BY_ENV_ID = {TEAM.env_id: TEAM, FFA.env_id: FFA}
+# The presets by name (`preset`); a preset's `game_type` is the GameType code states carry.
+TEAM_PRESET = GameConfig("team", "PommeTeamCompetition-v0", GameType.TEAM, view_radius=4)
+FFA_PRESET = GameConfig("ffa", "PommeFFACompetition-v0", GameType.FFA)
+PRESETS = {"team": TEAM_PRESET, "ffa": FFA_PRESET}
+CONFIG_BY_ENV_ID = {TEAM_PRESET.env_id: TEAM_PRESET, FFA_PRESET.env_id: FFA_PRESET}
 
 
 def preset(name: str) -> GameConfig:

@@ -11,7 +11,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 from numba import njit
 
-from .constants import NUM_ACTIONS, NUM_AGENTS, TEAM, GameConfig, Result
+from .constants import NUM_ACTIONS, NUM_AGENTS, TEAM_PRESET, GameConfig, Result
 from .generator import reset_game
 from .observation import Observation, empty_observations
 from .observe import observe_game
@@ -81,7 +81,7 @@ def _is_integer(x) -> bool:
 class Games:
     """N games of one preset, stepped together (the batched API)."""
 
-    def __init__(self, num_games: int, config: GameConfig = TEAM):
+    def __init__(self, num_games: int, config: GameConfig = TEAM_PRESET):
         if num_games <= 0:
             raise ValueError(f"num_games must be positive, got {num_games}")
         self.config = config
@@ -144,12 +144,12 @@ class Games:
 class Game:
     """One game, one Python call per step (the single-game API)."""
 
-    def __init__(self, config: GameConfig = TEAM):
+    def __init__(self, config: GameConfig = TEAM_PRESET):
         self._games = Games(1, config)
         self.config = config
 
     @classmethod
-    def from_state(cls, state: Mapping, config: GameConfig = TEAM) -> Game:
+    def from_state(cls, state: Mapping, config: GameConfig = TEAM_PRESET) -> Game:
         game = cls(config)
         game.load(state)
         return game

@@ -12,7 +12,7 @@ import time
 
 import numpy as np
 
-from .constants import NUM_ACTIONS, NUM_AGENTS, TEAM
+from .constants import NUM_ACTIONS, NUM_AGENTS, TEAM_PRESET
 from .engine import Game, Games
 
 GAMES_PER_RUN = 200
@@ -22,12 +22,12 @@ def _run_actions(run: int) -> tuple[np.ndarray, np.ndarray]:
     """Board seeds and an (games, 800, 4) action array for run `run`."""
     rng = np.random.default_rng(1000 + run)
     seeds = rng.integers(0, 2**31, GAMES_PER_RUN)
-    return seeds, rng.integers(0, NUM_ACTIONS, (GAMES_PER_RUN, TEAM.max_steps, NUM_AGENTS))
+    return seeds, rng.integers(0, NUM_ACTIONS, (GAMES_PER_RUN, TEAM_PRESET.max_steps, NUM_AGENTS))
 
 
 def single_api_run(run: int) -> tuple[float, float]:
     seeds, actions = _run_actions(run)
-    game = Game(TEAM)
+    game = Game(TEAM_PRESET)
     steps, in_step = 0, 0.0
     start = time.perf_counter()
     for g in range(GAMES_PER_RUN):
@@ -46,7 +46,7 @@ def single_api_run(run: int) -> tuple[float, float]:
 def batched_api_run(run: int) -> tuple[float, float]:
     seeds, actions = _run_actions(run)
     start = time.perf_counter()
-    games = Games(GAMES_PER_RUN, TEAM)
+    games = Games(GAMES_PER_RUN, TEAM_PRESET)
     games.reset(seeds)
     steps, in_step, k = 0, 0.0, 0
     while not games.done.all():

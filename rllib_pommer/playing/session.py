@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..agents.registry import make_agent
-from ..game.constants import NUM_ACTIONS, NUM_AGENTS, TEAM, Action, Item, Result, teammate_of
+from ..game.constants import NUM_ACTIONS, NUM_AGENTS, TEAM_PRESET, Action, Item, Result, teammate_of
 from ..game.engine import Game
 from ..game.records import GameRecorder
 from ..game.seeding import game_seeds
@@ -44,7 +44,7 @@ class PlaySpec:
 
     @property
     def partner_seat(self) -> int:
-        return teammate_of(self.seat, TEAM.game_type) - Item.AGENT0
+        return teammate_of(self.seat, TEAM_PRESET.game_type) - Item.AGENT0
 
     def players(self) -> list[str]:
         """Who plays each seat: `HUMAN` or a policy name."""
@@ -71,10 +71,10 @@ class HumanGame:
                        if name != HUMAN}
         _one_torch_thread()
         board_seed, rngs = game_seeds(spec.seed, 0)
-        self.game = Game(TEAM)
+        self.game = Game(TEAM_PRESET)
         self.obs = self.game.reset(board_seed)
         for seat, agent in self.agents.items():
-            agent.reset(seat, int(TEAM.game_type), rngs[seat])
+            agent.reset(seat, int(TEAM_PRESET.game_type), rngs[seat])
         self.recorder = GameRecorder(self.game.batch, 0, board_seed, " ".join(self.players))
         self.recorder.record.update(game=0, match_seed=spec.seed, human_seat=spec.seat,
                                     players=self.players)

@@ -23,7 +23,7 @@ from ray.rllib.core.columns import Columns
 
 from ..agents.action_filter import ActionFilter
 from ..agents.jitter import JitterCorrection
-from ..game.constants import TEAM
+from ..game.constants import TEAM_PRESET
 from ..game.raw_codec import unpack_raw
 from .names import LEARNER
 
@@ -53,7 +53,7 @@ class EpisodeFilters:
             agent = JitterCorrection(agent)
         if flags.get("action_filter"):
             agent = ActionFilter(agent)
-        agent.reset(seat, int(TEAM.game_type),
+        agent.reset(seat, int(TEAM_PRESET.game_type),
                     np.random.default_rng(np.frombuffer(first_raw.tobytes(), np.uint8)))
         self.agent = agent
         self.steps = 0

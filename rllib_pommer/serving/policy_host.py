@@ -14,7 +14,7 @@ import numpy as np
 
 from .. import learned  # noqa: F401  (registers the "learned" policy kind)
 from ..agents.registry import make_agent
-from ..game.constants import NUM_AGENTS, TEAM
+from ..game.constants import NUM_AGENTS, TEAM_PRESET
 from ..game.engine import Game
 from ..game.observation import Observation
 from .protocol import BadRequest
@@ -39,10 +39,10 @@ class PolicyHost:
         fresh install) and the first forward passes run now, not in the first real move (which
         the competition's runner gives 0.15 s); then forget that game. The seeding of real
         games is unchanged."""
-        game = Game(TEAM)
+        game = Game(TEAM_PRESET)
         for agent_id in range(NUM_AGENTS):
             obs = game.reset(agent_id)
-            self.agent.reset(agent_id, TEAM.game_type, np.random.default_rng(0))
+            self.agent.reset(agent_id, TEAM_PRESET.game_type, np.random.default_rng(0))
             for _ in range(steps):
                 self.act(obs.select(agent_id))
                 obs, _, done, _ = game.step([0] * NUM_AGENTS)

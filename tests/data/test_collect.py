@@ -18,7 +18,7 @@ from rllib_pommer.data.collector import Collection, plan_shards
 from rllib_pommer.data.dataset import open_dataset
 from rllib_pommer.data.expert import play_games
 from rllib_pommer.data.schema import SHARD_GLOB, encode, read_meta
-from rllib_pommer.game.constants import TEAM
+from rllib_pommer.game.constants import TEAM_PRESET
 from rllib_pommer.game.engine import Game
 from rllib_pommer.game.seeding import game_seeds
 
@@ -74,9 +74,9 @@ def test_samples_read_back_equal_a_replay_of_the_game(tiny_dataset, game):
     row_of = {tuple(k): i for i, k in enumerate(keys)}
     board_seed, rngs = game_seeds(TINY_SEED, game)
     assert set(table.column("board_seed").to_numpy()[keys[:, 0] == game]) == {board_seed}
-    engine, agents = Game(TEAM), [SimpleAgent() for _ in range(4)]
+    engine, agents = Game(TEAM_PRESET), [SimpleAgent() for _ in range(4)]
     for seat, agent in enumerate(agents):
-        agent.reset(seat, int(TEAM.game_type), rngs[seat])
+        agent.reset(seat, int(TEAM_PRESET.game_type), rngs[seat])
     obs, step, checked = engine.reset(board_seed), 0, 0
     while not engine.done:
         actions = [0] * 4

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rllib_pommer.game.constants import TEAM
+from rllib_pommer.game.constants import TEAM_PRESET
 from rllib_pommer.game.engine import Game, Games
 from rllib_pommer.game.records import GameRecorder, read_games, write_games
 from rllib_pommer.game.state import A_AMMO, A_KICK
@@ -22,11 +22,11 @@ def test_single_and_batched_apis_agree_step_by_step():
     rng = np.random.default_rng(0)
     seeds = rng.integers(0, 2**31, N)
     actions = rng.choice([0, 1, 2, 3, 4, 5, 5], size=(400, N, 4))
-    batch = Games(N, TEAM)
+    batch = Games(N, TEAM_PRESET)
     batch.reset(seeds)
     _power_start(batch.state)
     batch.observe()
-    singles = [Game(TEAM) for _ in range(N)]
+    singles = [Game(TEAM_PRESET) for _ in range(N)]
     for n, game in enumerate(singles):
         game.reset(int(seeds[n]))
         _power_start(game.state)
@@ -51,7 +51,7 @@ def test_recorded_game_exports_and_replays_exactly(tmp_path):
     rng = np.random.default_rng(1)
     records = []
     for seed in (11, 12):
-        game = Game(TEAM)
+        game = Game(TEAM_PRESET)
         game.reset(seed)
         recorder = GameRecorder(game.batch, 0, seed, agent_mix="RRRR")
         recorder.start()
@@ -73,7 +73,7 @@ def test_recorded_game_exports_and_replays_exactly(tmp_path):
 def test_a_recorded_mid_game_position_resumes_identically(public_games):
     record = next(read_games(public_games))
     middle = len(record["steps"]) // 2
-    game = Game.from_state(record["steps"][middle]["state"], TEAM)
+    game = Game.from_state(record["steps"][middle]["state"], TEAM_PRESET)
     for entry in record["steps"][middle + 1 :]:
         game.step(entry["actions"])
         assert game.dump() == entry["state"]

@@ -7,7 +7,7 @@ import copy
 import numpy as np
 import pytest
 
-from rllib_pommer.game.constants import TEAM
+from rllib_pommer.game.constants import TEAM_PRESET
 from rllib_pommer.game.engine import Game, Games
 from rllib_pommer.game.generator import reset_game
 from rllib_pommer.game.serialize import load_observation, load_state
@@ -19,7 +19,7 @@ def state() -> dict:
 
 
 def _fresh_state() -> dict:
-    game = Game(TEAM)
+    game = Game(TEAM_PRESET)
     game.reset(7)
     return game.dump()
 
@@ -47,7 +47,7 @@ def test_invalid_actions_name_the_agent_and_value(actions, message):
 
 
 def test_batched_invalid_action_names_the_game():
-    games = Games(3, TEAM)
+    games = Games(3, TEAM_PRESET)
     games.reset([1, 2, 3])
     actions = np.zeros((3, 4), np.int64)
     actions[2, 3] = 9
@@ -104,6 +104,6 @@ def test_malformed_observation_names_the_field(public_games):
 
 
 def test_reset_game_fills_a_valid_state():
-    games = Games(2, TEAM)
-    reset_game(games.state, 1, np.random.default_rng(3), TEAM)
+    games = Games(2, TEAM_PRESET)
+    reset_game(games.state, 1, np.random.default_rng(3), TEAM_PRESET)
     assert load_state(games.dump(1))  # the generated state passes validation

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rllib_pommer.game.constants import START_POSITIONS, TEAM, Item
+from rllib_pommer.game.constants import START_POSITIONS, TEAM_PRESET, Item
 from rllib_pommer.game.generator import count_unreachable_passages, generate_board
 
 FIXED_WOOD = {(1, 4), (1, 5), (1, 6), (4, 1), (5, 1), (6, 1),
@@ -17,7 +17,7 @@ SEEDS = range(400)
 
 @pytest.fixture(scope="module")
 def boards():
-    return [generate_board(np.random.default_rng(seed), TEAM) for seed in SEEDS]
+    return [generate_board(np.random.default_rng(seed), TEAM_PRESET) for seed in SEEDS]
 
 
 def test_wall_counts_and_symmetry(boards):
@@ -63,9 +63,9 @@ def test_item_types_and_wood_cells_are_uniform(boards):
 
 
 def test_same_seed_same_board_and_different_seeds_differ():
-    a = generate_board(np.random.default_rng(5), TEAM)
-    b = generate_board(np.random.default_rng(5), TEAM)
-    c = generate_board(np.random.default_rng(6), TEAM)
+    a = generate_board(np.random.default_rng(5), TEAM_PRESET)
+    b = generate_board(np.random.default_rng(5), TEAM_PRESET)
+    c = generate_board(np.random.default_rng(6), TEAM_PRESET)
     assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
     assert not np.array_equal(a[0], c[0])
 

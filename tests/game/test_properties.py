@@ -6,7 +6,7 @@ import numpy as np
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from rllib_pommer.game.constants import FFA, TEAM
+from rllib_pommer.game.constants import FFA_PRESET, TEAM_PRESET
 from rllib_pommer.game.engine import Game
 from rllib_pommer.game.invariants import VIOLATIONS, step_violation
 from rllib_pommer.game.state import A_AMMO, A_KICK, M_BOMBS, M_ITEMS
@@ -23,7 +23,7 @@ games = st.fixed_dictionaries({
 
 
 def _start(spec) -> Game:
-    game = Game(FFA if spec["ffa"] else TEAM)
+    game = Game(FFA_PRESET if spec["ffa"] else TEAM_PRESET)
     game.reset(spec["seed"])
     if spec["power_start"]:
         game.state.agents[0, :, A_KICK] = 1
@@ -49,7 +49,7 @@ def test_invariants_hold_after_every_step(spec):
 
 
 def test_the_invariant_check_catches_a_broken_state():
-    game = Game(TEAM)
+    game = Game(TEAM_PRESET)
     game.reset(3)
     s = game.state
     before = (s.board[0].copy(), s.agents[0].copy(), s.bombs[0].copy(), 0, s.items[0].copy(), 0)

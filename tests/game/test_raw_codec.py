@@ -5,13 +5,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from rllib_pommer.game.constants import TEAM
+from rllib_pommer.game.constants import TEAM_PRESET
 from rllib_pommer.game.engine import Games
 from rllib_pommer.game.raw_codec import RAW_SIZE, pack_raw, unpack_raw
 
 
 def test_round_trip_of_played_observations():
-    games = Games(3, TEAM)
+    games = Games(3, TEAM_PRESET)
     games.reset([1, 2, 3])
     rng = np.random.default_rng(0)
     for _ in range(40):  # bombs, flames and power-ups on the boards

@@ -10,7 +10,7 @@ import pytest
 
 from rllib_pommer.agents.registry import make_agent
 from rllib_pommer.arena import MatchSpec, record_games
-from rllib_pommer.game.constants import TEAM, Action
+from rllib_pommer.game.constants import TEAM_PRESET, Action
 from rllib_pommer.game.seeding import game_seeds
 from rllib_pommer.game.verify import verify_games
 from rllib_pommer.playing.session import HumanGame, PlaySpec
@@ -34,7 +34,7 @@ def test_a_person_playing_like_simple_agent_plays_the_arenas_game():
     seed = 5
     game = HumanGame(PlaySpec("simple", "static", seat=0, seed=seed))
     shadow = make_agent("simple")  # what the arena's agent on seat 0 would press
-    shadow.reset(0, int(TEAM.game_type), game_seeds(seed, 0)[1][0])
+    shadow.reset(0, int(TEAM_PRESET.game_type), game_seeds(seed, 0)[1][0])
     while not game.over:
         game.advance(shadow.act(game.obs.select(0)) if game.human_alive else Action.STOP)
     (arena,) = record_games(MatchSpec("simple", "static", games=1, seed=seed), 1,

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from aiohttp import web
 
-from rllib_pommer.game.constants import TEAM
+from rllib_pommer.game.constants import TEAM_PRESET
 from rllib_pommer.game.engine import Game
 from rllib_pommer.game.observation import Observation
 from rllib_pommer.game.serialize import dump_observation
@@ -60,7 +60,7 @@ def http_policy(folder: Path, ports: list[int], timeout: float = 0.15) -> Path:
 
 def team_observations(seat: int, steps: int, seed: int = 3) -> list[Observation]:
     """`seat`'s observations over the first `steps` steps of a game of random actions."""
-    game, rng = Game(TEAM), np.random.default_rng(seed)
+    game, rng = Game(TEAM_PRESET), np.random.default_rng(seed)
     obs = game.reset(seed)
     seen = []
     for _ in range(steps):

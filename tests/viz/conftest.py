@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rllib_pommer.game.constants import TEAM
+from rllib_pommer.game.constants import TEAM_PRESET
 from rllib_pommer.game.engine import Game
 from rllib_pommer.game.records import GameRecorder, write_games
 
@@ -17,7 +17,7 @@ def play_recorded(seed: int, max_steps: int = 120, with_observations: bool = Fal
                   **extra) -> dict:
     """One Team game of biased random play as a game record (plus `extra` top-level keys)."""
     rng = np.random.default_rng(seed)
-    game = Game(TEAM)
+    game = Game(TEAM_PRESET)
     game.reset(seed)
     recorder = GameRecorder(game.batch, 0, seed, "RRRR", with_observations)
     recorder.start()
