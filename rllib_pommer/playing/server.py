@@ -36,6 +36,7 @@ from aiohttp import WSCloseCode, web
 
 from ..game.constants import NUM_ACTIONS, Action
 from ..game.records import write_games
+from ..serving.app import start
 from ..serving.protocol import BadRequest, parse_body
 from ..viz.page import board_assets, page_html
 from .session import HUMAN, HumanGame
@@ -339,14 +340,7 @@ async def serve_game(app: web.Application, host: str, port: int,
     """Serve until the game ends (or SIGINT/SIGTERM, which forfeits it); the replay is saved
     either way. `on_ready` gets the bound port."""
     table = app[TABLE]
-    runner = web.AppRunner(app, access_log=None)
-    await runner.setup()
-    try:
-        await web.TCPSite(runner, host, port).start()
-    except OSError:
-        await runner.cleanup()
-        raise
-    bound_port = runner.addresses[0][1]
+    runner, bound_port = await start(app, host, port)  # the agent server's time-outs and limits
     loop = asyncio.get_running_loop()
 
     def stop() -> None:

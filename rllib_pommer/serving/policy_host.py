@@ -12,7 +12,6 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .. import learned  # noqa: F401  (registers the "learned" policy kind)
 from ..agents.registry import make_agent
 from ..game.constants import NUM_AGENTS, TEAM_PRESET
 from ..game.engine import Game
