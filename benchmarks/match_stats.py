@@ -16,7 +16,8 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from rllib_pommer.arena import MatchSpec, play_match, summarise
+from rllib_pommer.arena.match import MatchSpec, play_match
+from rllib_pommer.arena.records import summarise
 
 REFERENCE = Path(__file__).resolve().parents[1] / "tests" / "reference" / "simpleagent_stats.json"
 CONFIGS = {"vs_SimpleAgent": "simple", "vs_StaticAgent": "static",

@@ -19,8 +19,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from rllib_pommer.bc import BCConfig, train
 from rllib_pommer.data.expert import play_games
+from rllib_pommer.imitation.bc import BCConfig, train
 
 
 def collection_games_per_s(draws: int, games: int = 32) -> float:

@@ -16,7 +16,7 @@ all pass, 1 otherwise. A `--venv` that already exists is reused: only this proje
 reinstalled (`--no-deps --force-reinstall`), which takes seconds instead of the minutes a full
 install of Ray and torch takes. The venv is deleted at the end unless `--venv` or `--keep` is
 given. CI runs it (.ci/run; about 6 minutes, most of it installing Ray and torch); run it
-after changing what the package ships (pyproject.toml, setup.py, rllib_pommer/shipped.py).
+after changing what the package ships (pyproject.toml, setup.py, rllib_pommer/util/shipped.py).
 """
 
 from __future__ import annotations
@@ -79,7 +79,8 @@ def main(argv: list[str] | None = None) -> int:
         for what, command, expect, timeout in checks:
             if not run(what, command, elsewhere, expect, timeout):
                 return 1
-        shipped = subprocess.run([str(python), "-c", "from rllib_pommer.shipped import data_dir;"
+        shipped = subprocess.run([str(python), "-c",
+                                  "from rllib_pommer.util.shipped import data_dir;"
                                   "print(data_dir('policies'))"], cwd=elsewhere,
                                  capture_output=True, text=True, check=True).stdout.strip()
         inside = Path(shipped).is_relative_to(venv)

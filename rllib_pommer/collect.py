@@ -22,7 +22,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from .data.collector import SHARD_GAMES, Collection, Dagger, ShardResult
-from .outputs import check_output_dir
+from .util.outputs import check_output_dir
 
 
 def _positive(text: str) -> int:

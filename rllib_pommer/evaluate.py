@@ -27,9 +27,10 @@ from pathlib import Path
 from tqdm import tqdm
 
 from .agents.registry import FILTERS
-from .arena import MatchSpec, play_match, record_games, summarise, write_records
+from .arena.match import MatchSpec, play_match, record_games
+from .arena.records import summarise, write_records
 from .game.records import write_games
-from .outputs import check_output
+from .util.outputs import check_output
 
 
 def _filters(text: str) -> tuple[str, ...]:

@@ -11,9 +11,9 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .bc import WEIGHTS_FILE, BCConfig, train, write_policy_file
-from .cli_options import add_options, settings_from
-from .outputs import check_output_dir
+from .imitation.bc import WEIGHTS_FILE, BCConfig, train, write_policy_file
+from .util.cli_options import add_options, settings_from
+from .util.outputs import check_output_dir
 
 _HELP = {
     "data": "dataset folder(s) of shards", "out": "policy folder to write",

@@ -21,9 +21,9 @@ import sys
 import time
 from pathlib import Path
 
-from .outputs import check_output
 from .playing.server import make_app, parse_turn_time, serve_game
 from .playing.session import HumanGame, PlaySpec
+from .util.outputs import check_output
 
 DEFAULT_TURN_TIME = 0.5
 

@@ -23,8 +23,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from .cli_options import add_options, settings_from
 from .rl.settings import RunSettings
+from .util.cli_options import add_options, settings_from
 
 HELP = {
     "curriculum": "a name in curriculum/ or a .toml path (default: %(default)s)",

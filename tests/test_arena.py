@@ -7,7 +7,9 @@ import json
 
 import pytest
 
-from rllib_pommer.arena import MatchSpec, play_match, summarise, wilson
+from rllib_pommer.arena.match import MatchSpec, play_match
+from rllib_pommer.arena.rates import wilson
+from rllib_pommer.arena.records import summarise
 from rllib_pommer.evaluate import main
 from rllib_pommer.game.records import read_games
 from rllib_pommer.replay import main as replay_main

@@ -15,10 +15,11 @@ import pyarrow.parquet as pq
 import pytest
 import tomllib
 
-from rllib_pommer import bc, collect, imitate, replay, serve
+from rllib_pommer import collect, imitate, replay, serve
 from rllib_pommer.data.collector import Collection
 from rllib_pommer.data.schema import SHARD_KEY
 from rllib_pommer.game.records import write_games
+from rllib_pommer.imitation import bc
 
 from .conftest import PUBLIC_GAMES
 
@@ -83,7 +84,7 @@ def _a_file(tmp: Path) -> Path:
 def _cut_weights(tmp: Path) -> Path:
     import torch
 
-    from rllib_pommer.network import PommerNet
+    from rllib_pommer.imitation.network import PommerNet
 
     path = tmp / "pi.pt"
     torch.save(PommerNet().state_dict(), path)

@@ -1,4 +1,4 @@
-"""Options generated from settings dataclasses (cli_options.py): one per field, typed, with the
+"""Options generated from settings dataclasses (util/cli_options.py): one per field, typed, with the
 field's default, so `imitate` and `train` never retype a setting."""
 
 from __future__ import annotations
@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from rllib_pommer.bc import BCConfig
-from rllib_pommer.cli_options import add_options, settings_from
+from rllib_pommer.imitation.bc import BCConfig
+from rllib_pommer.util.cli_options import add_options, settings_from
 
 
 @dataclass

@@ -14,8 +14,8 @@ from pettingzoo.utils.conversions import parallel_to_aec
 
 from rllib_pommer.envs import ENV_ID, PommeParallelEnv, PommeTeamEnv, parallel_env
 from rllib_pommer.envs.team import PLANES_SPACE
-from rllib_pommer.features import featurize
 from rllib_pommer.game.state import A_COL, A_ROW
+from rllib_pommer.imitation.features import featurize
 
 
 def test_pettingzoo_api_and_seed():

@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from rllib_pommer.features import NUM_PLANES, featurize
 from rllib_pommer.game.constants import GameType, Item
 from rllib_pommer.game.engine import Games
 from rllib_pommer.game.observation import empty_observations
-from rllib_pommer.network import PommerNet
+from rllib_pommer.imitation.features import NUM_PLANES, featurize
+from rllib_pommer.imitation.network import PommerNet
 
 
 def _observation(agent_id=0, game_type=GameType.TEAM):

@@ -8,13 +8,13 @@ import numpy as np
 import pytest
 import torch
 
-from rllib_pommer import bc
-from rllib_pommer.bc import BCConfig, evaluate, train, write_policy_file
 from rllib_pommer.data.collector import Collection
 from rllib_pommer.data.dataset import open_dataset
 from rllib_pommer.evaluate import main as evaluate_main
-from rllib_pommer.learned import load_policy_net
-from rllib_pommer.network import PommerNet
+from rllib_pommer.imitation import bc
+from rllib_pommer.imitation.bc import BCConfig, evaluate, train, write_policy_file
+from rllib_pommer.imitation.learned import load_policy_net
+from rllib_pommer.imitation.network import PommerNet
 
 
 @pytest.fixture(scope="module")

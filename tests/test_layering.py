@@ -1,12 +1,17 @@
-"""Data flows one way: game -> agents -> data/features/network -> rl -> jobs. A module may not
-import the heavy packages a layer above it brings in."""
+"""Data flows one way: game -> agents -> data/imitation/arena -> rl -> jobs. A module may not
+import the heavy packages a layer above it brings in; the top level of the package holds the jobs
+alone."""
 
 from __future__ import annotations
 
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
+import tomllib
+
+PACKAGE = Path(__file__).resolve().parents[1] / "rllib_pommer"
 
 
 def _loaded(modules: list[str], heavy: tuple[str, ...], then: str = "") -> str:
@@ -29,10 +34,39 @@ def test_lower_layers_do_not_import_ray_torch_or_gymnasium(modules):
     assert _loaded(modules, ("ray", "torch", "gymnasium")) == ""
 
 
-def test_imitation_code_does_not_import_ray():
-    modules = ["rllib_pommer.bc", "rllib_pommer.learned", "rllib_pommer.learn_speed",
-               "rllib_pommer.imitate", "rllib_pommer.collect"]
+def _package_modules(package: str) -> list[str]:
+    return [f"rllib_pommer.{package}.{path.stem}"
+            for path in sorted((PACKAGE / package).glob("*.py")) if path.stem != "__init__"]
+
+
+def test_imitation_and_arena_code_do_not_import_ray():
+    """Every module of imitation/ and arena/, and the jobs over them."""
+    modules = (_package_modules("imitation") + _package_modules("arena")
+               + ["rllib_pommer.imitate", "rllib_pommer.collect", "rllib_pommer.evaluate"])
+    assert "rllib_pommer.imitation.speed" in modules and "rllib_pommer.arena.match" in modules
     assert _loaded(modules, ("ray",)) == ""
+
+
+def test_util_is_standard_library_only():
+    """util/ may be imported from any layer, so it brings in nothing: no third-party package and
+    no module of ours outside util/."""
+    modules = _package_modules("util")
+    assert len(modules) == 4
+    code = (f"import sys\nbefore = set(sys.modules)\nimport {', '.join(modules)}\n"
+            "print(','.join(sorted(m for m in set(sys.modules) - before "
+            "if m.split('.')[0] not in sys.stdlib_module_names "
+            "and m not in ('rllib_pommer', '__mp_main__') "  # multiprocessing's alias of __main__
+            "and not m.startswith('rllib_pommer.util'))))")
+    assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          check=True).stdout.strip() == ""
+
+
+def test_the_top_level_holds_the_jobs_alone():
+    """Library code lives in the packages; each top-level module is a job with its command."""
+    scripts = tomllib.loads((PACKAGE.parent / "pyproject.toml").read_text())["project"]["scripts"]
+    jobs = {target.split(":")[0].removeprefix("rllib_pommer.") for target in scripts.values()}
+    top = {path.stem for path in PACKAGE.glob("*.py")} - {"__init__"}
+    assert top == jobs
 
 
 def test_user_envs_do_not_import_ray_or_torch():

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import torch
 
-from rllib_pommer import learn_speed
-from rllib_pommer.network import PommerNet
+from rllib_pommer.imitation import speed
+from rllib_pommer.imitation.network import PommerNet
 
 
 def _forward_macs(num_outputs: int) -> int:
@@ -22,17 +22,17 @@ def _forward_macs(num_outputs: int) -> int:
 
 def test_flops_are_two_per_multiply_add_and_backward_costs_about_twice_forward():
     for outputs in (6, 1):
-        forward = learn_speed.flops_per_sample(outputs, backward=False)
+        forward = speed.flops_per_sample(outputs, backward=False)
         assert forward == 2 * _forward_macs(outputs)
-        total = learn_speed.flops_per_sample(outputs)
+        total = speed.flops_per_sample(outputs)
         first_conv_input_grad = 2 * 11 * 11 * 32 * 19 * 9  # not needed: the planes are data
         assert total == 3 * forward - first_conv_input_grad
 
 
 def test_every_measure_runs_and_reports_a_rate():
-    assert learn_speed.plain_ppo_samples_per_s(seconds=0.1) > 0
-    speeds = learn_speed.bc_speeds(seconds=0.1)
+    assert speed.plain_ppo_samples_per_s(seconds=0.1) > 0
+    speeds = speed.bc_speeds(seconds=0.1)
     assert speeds["bc_samples_per_s"] > 0 and speeds["bc_baseline_samples_per_s"] > 0
-    bound = learn_speed.flop_bound(seconds=0.1)
+    bound = speed.flop_bound(seconds=0.1)
     assert bound["flop_bound_samples_per_s"] == (bound["peak_flops_assumed"]
                                                  / bound["ppo_flops_per_sample"])

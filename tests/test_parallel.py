@@ -6,7 +6,7 @@ import itertools
 
 import pytest
 
-from rllib_pommer.parallel import map_unordered
+from rllib_pommer.util.parallel import map_unordered
 
 
 def _square(x: int) -> int:

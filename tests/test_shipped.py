@@ -10,9 +10,9 @@ from pathlib import Path
 
 import pytest
 
-from rllib_pommer import shipped
 from rllib_pommer.agents.registry import resolve_policy
 from rllib_pommer.rl.curriculum import find_curriculum, load_curriculum
+from rllib_pommer.util import shipped
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -56,7 +56,7 @@ def test_a_built_wheel_carries_the_data_folders_and_finds_them(tmp_path):
     assert not list(inside.rglob("training"))  # local training output stays out
     where = subprocess.run(
         [sys.executable, "-I", "-c", "import sys; sys.path.insert(0, sys.argv[1]); "
-         "from rllib_pommer.shipped import data_dir; "
+         "from rllib_pommer.util.shipped import data_dir; "
          "print(data_dir('policies'), data_dir('curriculum'))", str(built)],
         cwd=tmp_path, check=True, capture_output=True, text=True).stdout.split()
     assert where == [str(inside / "policies"), str(inside / "curriculum")]

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from ..shipped import FOLDERS, data_dir
+from ..util.shipped import FOLDERS, data_dir
 from .action_filter import ActionFilter
 from .base import Agent
 from .http_agent import HttpAgent
@@ -95,7 +95,7 @@ def _scripted(agent: type) -> Factory:
 KINDS: dict[str, Kind] = {
     **{kind: Kind(_scripted(rule.agent), fixed="scripted") for kind, rule in RULES.items()},
     "http": Kind(HttpAgent.from_spec, keys=None),  # http_agent.py checks its own keys
-    "learned": Kind(None, "rllib_pommer.learned",
+    "learned": Kind(None, "rllib_pommer.imitation.learned",
                     {"weights": (str, True), "greedy": (bool, False)}, "net"),
     "rllib_checkpoint": Kind(None, "rllib_pommer.rl.checkpoint_policy",
                              {"checkpoint": (str, True), "greedy": (bool, False)}, "net"),

@@ -24,7 +24,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from ..game.constants import TEAM_PRESET
-from ..parallel import map_unordered
+from ..util.parallel import map_unordered
 from .dagger import check_setup, play_dagger_games
 from .expert import play_games
 from .schema import (
@@ -71,7 +71,7 @@ def plan_shards(games: int, seed: int, shard_games: int, label_draws: int = 0,
     players = {}
     if dagger is not None:
         check_setup(dagger.opponents, label_draws)
-        from ..learned import greedy_actor  # torch, for DAgger only
+        from ..imitation.learned import greedy_actor  # torch, for DAgger only
 
         _, weights = greedy_actor(dagger.policy)
         players = {"agents": "dagger", "policy": dagger.policy,
@@ -102,7 +102,7 @@ def _play(meta: ShardMeta) -> Samples:
     games = range(meta.first_game, meta.stop_game)
     if meta.agents != "dagger":
         return play_games(meta.seed, games, label_draws=meta.label_draws)
-    from ..learned import greedy_actor  # torch, for DAgger only
+    from ..imitation.learned import greedy_actor  # torch, for DAgger only
 
     act, weights = greedy_actor(meta.policy)
     if _sha256(weights) != meta.policy_sha256:

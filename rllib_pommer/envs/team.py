@@ -35,11 +35,11 @@ from dataclasses import replace
 import gymnasium as gym
 import numpy as np
 
-from ..features import NUM_PLANES, featurize
 from ..game.constants import NUM_ACTIONS, NUM_AGENTS, TEAM_PRESET, Result
 from ..game.engine import Game
 from ..game.observation import Observation
 from ..game.raw_codec import RAW_SIZE, pack_raw
+from ..imitation.features import NUM_PLANES, featurize
 from ..rl.names import REWARD_MODES
 from ..viz.frames import state_frame
 from ..viz.render import draw_frame

@@ -22,8 +22,8 @@ from pathlib import Path
 import torch
 
 from ..agents.registry import PolicySpec, register_kind
-from ..learned import LearnedAgent, LearnedPolicy
-from ..network import PommerNet
+from ..imitation.learned import LearnedAgent, LearnedPolicy
+from ..imitation.network import PommerNet
 
 MODULE_STATE = Path("learner_group/learner/rl_module/learner/module_state.pkl")
 

@@ -35,7 +35,7 @@ from ray.rllib.algorithms.ppo import PPOConfig
 from ray.rllib.core.rl_module.multi_rl_module import MultiRLModuleSpec
 from ray.rllib.core.rl_module.rl_module import RLModuleSpec
 
-from ..learned import load_policy_net
+from ..imitation.learned import load_policy_net
 from .callbacks import CurriculumCallback
 from .connectors import LearnerFilters
 from .curriculum import Curriculum

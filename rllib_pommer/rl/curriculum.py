@@ -32,7 +32,8 @@ from pathlib import Path
 from typing import Any
 
 from ..agents.registry import KINDS, policies_dir, policy_names, resolve_policy
-from ..shipped import data_dir
+from ..game.constants import TEAM_PRESET
+from ..util.shipped import data_dir
 from .names import REWARD_MODES
 from .settings import PPOSettings
 
@@ -97,7 +98,7 @@ class Curriculum:
 
 def curriculum_dir() -> Path:
     """The shipped curricula: the repository's `curriculum/` (a wheel's copy of it), or the
-    folder named by RLLIB_POMMER_CURRICULA, found from any working directory (shipped.py)."""
+    folder named by RLLIB_POMMER_CURRICULA, found from any working directory (util/shipped.py)."""
     return data_dir("curriculum")
 
 
@@ -206,6 +207,6 @@ def load_curriculum(name_or_path: str | Path) -> Curriculum:
         stages=stages,
         pi_weights=(path.parent / data["pi_weights"] if "pi_weights" in data
                     else policies_dir() / "imitation" / "pi.pt").resolve(),
-        max_steps=data.get("max_steps", 800),
+        max_steps=data.get("max_steps", TEAM_PRESET.max_steps),
         ppo=PPOSettings.from_options(ppo),
     )

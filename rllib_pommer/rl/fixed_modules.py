@@ -31,7 +31,7 @@ from ..agents.registry import KINDS, resolve_policy
 from ..agents.scripted import RULES
 from ..agents.simple import RECENT_LENGTH, SimpleMemory
 from ..game.raw_codec import unpack_raw
-from ..learned import load_policy_net
+from ..imitation.learned import load_policy_net
 from .checkpoint_policy import checkpoint_path, load_checkpoint_net
 
 # Packed memory: recent cells (6 x 2), recent_len, prev_dir, rng state (uint64 bits), seeded flag.

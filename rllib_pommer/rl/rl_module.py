@@ -36,8 +36,8 @@ from ray.rllib.core.columns import Columns
 from ray.rllib.core.rl_module.apis import ValueFunctionAPI
 from ray.rllib.core.rl_module.torch import TorchRLModule
 
-from ..learned import load_policy_net
-from ..network import PommerNet
+from ..imitation.learned import load_policy_net
+from ..imitation.network import PommerNet
 from .names import LEARNER  # noqa: F401  (its module id, long imported from here)
 
 

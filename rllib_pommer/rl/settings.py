@@ -1,9 +1,9 @@
 """The settings of a PPO run, typed and written once: what PPO computes, and where the run goes.
 
 Plain dataclasses that import neither Ray nor torch, so that `python -m rllib_pommer.train` builds
-its options from them before anything heavy loads (`rllib_pommer.cli_options`), a curriculum file
-is checked against them without Ray, and the plain-torch baseline of `bench learn`
-(`learn_speed.py`) measures the same minibatch and clip as the real learner.
+its options from them before anything heavy loads (`util/cli_options.py`), a curriculum file is
+checked against them without Ray, and the plain-torch baseline of `bench learn`
+(`imitation/speed.py`) measures the same minibatch and clip as the real learner.
 
 `PPOSettings` are the values `rl/config.build_config` hands RLlib; a curriculum's `[ppo]` table may
 override the fields marked as options (our choices, argued in rl/config.py), never the paper's

@@ -5,7 +5,7 @@ zero-cost twin) and the learner.
 with the advantage estimation, then `num_epochs` passes of minibatches of 128 through the real
 `PommerPPOModule`) on batches the real env runner sampled with the quick curriculum's config, with
 pi trainable and with pi frozen (the value warm-up), beside the plain-torch baselines of
-`learn_speed.py` on the same thread count. Samples/s count learner rows times epochs.
+`imitation/speed.py` on the same thread count. Samples/s count learner rows times epochs.
 
 `train_speeds(iterations)` builds the PPO config of a curriculum (default "quick", first stage:
 all four agents exposed, SimpleAgent opponents as stateful fixed modules, the learner's filters)
@@ -29,8 +29,8 @@ import torch
 from ray.rllib.execution.rollout_ops import synchronous_parallel_sample
 from ray.tune.registry import register_env
 
-from .. import learn_speed
-from ..network import PommerNet
+from ..imitation import speed as imitation_speed
+from ..imitation.network import PommerNet
 from .config import build_config
 from .curriculum import load_curriculum
 from .env import ENV_NAME, PommeEnv
@@ -156,9 +156,9 @@ def learner_speeds(updates: int = 3, curriculum: str = "quick") -> dict:
     torch.set_num_threads(threads)
     torch.set_flush_denormal(True)
     result = {"torch_threads": threads, **_rllib_learner_speeds(updates, curriculum)}
-    result["ppo_baseline_samples_per_s"] = learn_speed.plain_ppo_samples_per_s()
-    result.update(learn_speed.bc_speeds())
-    result.update(learn_speed.flop_bound())
+    result["ppo_baseline_samples_per_s"] = imitation_speed.plain_ppo_samples_per_s()
+    result.update(imitation_speed.bc_speeds())
+    result.update(imitation_speed.flop_bound())
     result["ppo_speedup"] = result["ppo_samples_per_s"] / result["ppo_baseline_samples_per_s"]
     result["bc_speedup"] = result["bc_samples_per_s"] / result["bc_baseline_samples_per_s"]
     return {k: round(v, 3) if isinstance(v, float) else v for k, v in result.items()}

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..agents.registry import FILTER_SUFFIXES, FILTERS
-from ..rates import wilson
+from ..arena.rates import wilson
 
 VARIANTS = ("vanilla", "jitter", "action", "jitter_action")
 NAME_SEPARATOR = "__vs__"

@@ -11,8 +11,8 @@ from rllib_pommer.data.collector import Collection, Dagger
 from rllib_pommer.data.dagger import TEAM_SEATS, play_dagger_games, seating
 from rllib_pommer.data.dataset import open_dataset
 from rllib_pommer.game.constants import START_POSITIONS
-from rllib_pommer.learned import greedy_actor
-from rllib_pommer.network import PommerNet
+from rllib_pommer.imitation.learned import greedy_actor
+from rllib_pommer.imitation.network import PommerNet
 
 DRAWS = 8
 

@@ -9,7 +9,7 @@ import sys
 import pytest
 
 from rllib_pommer.agents.registry import make_agent
-from rllib_pommer.arena import MatchSpec, record_games
+from rllib_pommer.arena.match import MatchSpec, record_games
 from rllib_pommer.game.constants import TEAM_PRESET, Action
 from rllib_pommer.game.seeding import game_seeds
 from rllib_pommer.game.verify import verify_games

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 import torch
 
-from rllib_pommer.network import PommerNet
+from rllib_pommer.imitation.network import PommerNet
 
 
 @pytest.fixture(scope="session")

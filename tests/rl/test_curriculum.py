@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pytest
 
+from rllib_pommer.game.constants import TEAM_PRESET
 from rllib_pommer.rl.curriculum import curriculum_names, load_curriculum
 
 from ..conftest import REPO_ROOT
@@ -47,3 +48,8 @@ def test_a_file_anywhere_starts_from_the_shipped_weights_unless_it_names_its_own
         load_curriculum("quick").pi_weights == (REPO_ROOT / "policies/imitation/pi.pt").resolve()
     (tmp_path / "own.toml").write_text('pi_weights = "w/pi.pt"\n' + stage)
     assert load_curriculum(tmp_path / "own.toml").pi_weights == (tmp_path / "w/pi.pt").resolve()
+
+
+def test_episodes_last_as_long_as_the_team_game_unless_the_file_says_otherwise():
+    assert load_curriculum("paper").max_steps == TEAM_PRESET.max_steps == 800
+    assert load_curriculum("quick").max_steps == 400

@@ -10,7 +10,7 @@ from ray.rllib.core.columns import Columns
 
 from rllib_pommer.agents.scripted import RULES
 from rllib_pommer.agents.simple import new_memory, simple_actions
-from rllib_pommer.arena import MatchSpec, record_games, seats_of_team_a
+from rllib_pommer.arena.match import MatchSpec, record_games, seats_of_team_a
 from rllib_pommer.game.seeding import game_seeds
 from rllib_pommer.rl.env import (
     ACTION_SPACE,

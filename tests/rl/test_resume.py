@@ -17,7 +17,7 @@ from pathlib import Path
 
 import torch
 
-from rllib_pommer.learned import load_policy_net
+from rllib_pommer.imitation.learned import load_policy_net
 from rllib_pommer.rl import ray_session
 from rllib_pommer.rl.checkpoint_policy import load_checkpoint_net
 from rllib_pommer.viz.training import read_rows

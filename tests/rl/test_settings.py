@@ -116,7 +116,7 @@ def test_our_ray_gets_the_run_settings_cpus(monkeypatch):
 
 
 def test_settings_and_the_train_parser_load_neither_ray_nor_torch():
-    parse = ("import argparse; rllib_pommer.cli_options.add_options(argparse.ArgumentParser(), "
-             "rllib_pommer.rl.settings.RunSettings, {})")
-    assert _loaded(["rllib_pommer.rl.settings", "rllib_pommer.cli_options", "rllib_pommer.train"],
-                   ("ray", "torch"), parse) == ""
+    parse = ("import argparse; rllib_pommer.util.cli_options.add_options("
+             "argparse.ArgumentParser(), rllib_pommer.rl.settings.RunSettings, {})")
+    assert _loaded(["rllib_pommer.rl.settings", "rllib_pommer.util.cli_options",
+                    "rllib_pommer.train"], ("ray", "torch"), parse) == ""

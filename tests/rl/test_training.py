@@ -8,7 +8,7 @@ import pytest
 import torch
 from ray.tune.registry import register_env
 
-from rllib_pommer.arena import MatchSpec, play_match
+from rllib_pommer.arena.match import MatchSpec, play_match
 from rllib_pommer.rl.checkpoint_policy import load_checkpoint_net
 from rllib_pommer.rl.config import build_config
 from rllib_pommer.rl.curriculum import load_curriculum

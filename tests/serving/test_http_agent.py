@@ -12,7 +12,7 @@ from aiohttp import web
 
 from rllib_pommer.agents.http_agent import HttpAgent
 from rllib_pommer.agents.registry import make_agent
-from rllib_pommer.arena import MatchSpec, play_match
+from rllib_pommer.arena.match import MatchSpec, play_match
 
 from .conftest import games_played, http_policy, running, team_observations
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from rllib_pommer.arena import MatchSpec, play_match
+from rllib_pommer.arena.match import MatchSpec, play_match
 
 from .conftest import games_played, http_policy
 

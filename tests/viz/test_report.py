@@ -8,7 +8,7 @@ import re
 import numpy as np
 from PIL import Image
 
-from rllib_pommer.arena import GameRecord, write_records
+from rllib_pommer.arena.records import GameRecord, write_records
 from rllib_pommer.game.records import write_games
 from rllib_pommer.report import main
 

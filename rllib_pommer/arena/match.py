@@ -1,4 +1,5 @@
-"""Matches between two named policies in Team games: one record per game, and their summary.
+"""Matches between two named policies in Team games, played in worker processes: one
+`records.GameRecord` per game, and the replays of chosen games.
 
 Every game draws its board and all agents' random streams from (seed, game index) by the rule of
 `game/seeding.py`, so a match gives the same records whatever the number of worker processes or
@@ -10,27 +11,23 @@ fixed.
 
 from __future__ import annotations
 
-import csv
-import json
-import math
 import os
-from collections.abc import Callable, Iterator, Sequence
-from dataclasses import asdict, dataclass, field
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from functools import partial
-from pathlib import Path
 
 import numpy as np
 import torch
 
-from .agents.base import innermost
-from .agents.http_agent import HttpAgent
-from .agents.registry import make_agent
-from .game.blast import mark_blast
-from .game.constants import TEAM_PRESET, Action
-from .game.engine import Games
-from .game.records import GameRecorder
-from .game.seeding import game_seeds
-from .game.state import (
+from ..agents.base import innermost
+from ..agents.http_agent import HttpAgent
+from ..agents.registry import make_agent
+from ..game.blast import mark_blast
+from ..game.constants import TEAM_PRESET, Action
+from ..game.engine import Games
+from ..game.records import GameRecorder
+from ..game.seeding import game_seeds
+from ..game.state import (
     A_ALIVE,
     A_AMMO,
     A_COL,
@@ -42,9 +39,9 @@ from .game.state import (
     B_ROW,
     M_BOMBS,
 )
-from .learned import LearnedAgent
-from .parallel import map_unordered
-from .rates import wilson
+from ..imitation.learned import LearnedAgent
+from ..util.parallel import map_unordered
+from .records import GameRecord
 
 SEATS_A = ((0, 2), (1, 3))
 
@@ -63,24 +60,6 @@ class MatchSpec:
     def __post_init__(self):
         if self.games <= 0:
             raise ValueError(f"games must be a positive number, got {self.games}")
-
-
-@dataclass
-class GameRecord:
-    """What one game did, seen from team A."""
-
-    game: int
-    seed: int
-    seats_a: list[int]
-    result: str  # "win", "loss" or "tie" for team A
-    length: int
-    died: list[bool]  # by seat
-    own_bomb_deaths: list[bool]  # by seat
-    bombs_laid: list[int]  # by seat
-    # The match, so a records file names what it holds (the report reads it from the rows).
-    team: str = ""
-    vs: str = ""
-    filters: list[str] = field(default_factory=list)
 
 
 def seats_of_team_a(spec: MatchSpec, game: int) -> tuple[int, int]:
@@ -263,49 +242,3 @@ def record_games(spec: MatchSpec, count: int, observations: bool = False) -> lis
         games = range(start, min(start + chunk_games, count, spec.games))
         replays += _play_chunk(spec, games, observations)[1]
     return replays
-
-
-def summarise(records: Sequence[GameRecord]) -> dict:
-    """Team A's rates with 95% CIs, mean length, own-bomb losses and bombs per agent."""
-    n = len(records)
-    out: dict = {"games": n}
-    for outcome in ("win", "loss", "tie"):
-        k = sum(r.result == outcome for r in records)
-        out[outcome] = k / n
-        out[f"{outcome}_ci95"] = list(wilson(k, n))
-    lengths = np.array([r.length for r in records], float)
-    out["mean_length"] = float(lengths.mean())
-    out["mean_length_ci95"] = _mean_ci(lengths)
-    a_seats = [(r, s) for r in records for s in r.seats_a]
-    b_seats = [(r, s) for r in records for s in range(4) if s not in r.seats_a]
-    out["own_bomb_deaths_a"] = sum(r.own_bomb_deaths[s] for r, s in a_seats)
-    games_with_own_death = sum(any(r.own_bomb_deaths[s] for s in r.seats_a) for r in records)
-    out["games_with_own_bomb_death_a"] = games_with_own_death / n
-    out["bombs_per_agent_a"] = float(np.mean([r.bombs_laid[s] for r, s in a_seats]))
-    out["bombs_per_agent_b"] = float(np.mean([r.bombs_laid[s] for r, s in b_seats]))
-    return out
-
-
-def _mean_ci(values: np.ndarray) -> list[float]:
-    half = 1.96 * values.std(ddof=1) / math.sqrt(len(values)) if len(values) > 1 else math.inf
-    return [float(values.mean() - half), float(values.mean() + half)]
-
-
-def record_rows(records: Sequence[GameRecord]) -> Iterator[dict]:
-    for record in records:
-        yield asdict(record)
-
-
-def write_records(path: Path, records: Sequence[GameRecord]) -> None:
-    """The rows of `record_rows` as a .csv file (lists as JSON) or, for any other suffix, JSON
-    Lines."""
-    rows = list(record_rows(records))
-    if path.suffix == ".csv":
-        with open(path, "w", newline="") as f:
-            writer = csv.DictWriter(f, fieldnames=list(rows[0]))
-            writer.writeheader()
-            writer.writerows({k: json.dumps(v) if isinstance(v, list) else v
-                              for k, v in row.items()} for row in rows)
-    else:
-        with open(path, "w") as f:
-            f.writelines(json.dumps(row) + "\n" for row in rows)

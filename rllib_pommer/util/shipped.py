@@ -17,7 +17,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-PACKAGE = Path(__file__).resolve().parent
+PACKAGE = Path(__file__).resolve().parents[1]
 SHIPPED = "_shipped"  # the copies' folder inside the package, in a wheel
 # Data folder -> the environment variable that overrides where it is.
 FOLDERS = {"policies": "RLLIB_POMMER_POLICIES", "curriculum": "RLLIB_POMMER_CURRICULA"}

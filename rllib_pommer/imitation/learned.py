@@ -20,10 +20,10 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from .agents.base import innermost
-from .agents.registry import PolicySpec, make_agent, register_kind, resolve_policy
+from ..agents.base import innermost
+from ..agents.registry import PolicySpec, make_agent, register_kind, resolve_policy
+from ..game.observation import Observation
 from .features import featurize
-from .game.observation import Observation
 from .network import PommerNet
 
 

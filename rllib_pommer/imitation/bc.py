@@ -27,8 +27,8 @@ from torch.nn import functional as F
 from torch.utils.tensorboard import SummaryWriter
 from tqdm import tqdm
 
-from .data.dataset import Dataset, open_dataset
-from .data.schema import Batch
+from ..data.dataset import Dataset, open_dataset
+from ..data.schema import Batch
 from .features import featurize
 from .learned import load_policy_net
 from .network import PommerNet

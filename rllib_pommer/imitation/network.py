@@ -16,8 +16,8 @@ from __future__ import annotations
 import torch
 from torch import nn
 
+from ..game.constants import NUM_ACTIONS
 from .features import NUM_PLANES
-from .game.constants import NUM_ACTIONS
 
 CHANNELS = (32, 64, 64)
 HIDDEN = 128

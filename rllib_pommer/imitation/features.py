@@ -28,8 +28,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .game.constants import GameType, Item, enemies_of, teammate_of
-from .game.observation import Observation
+from ..game.constants import GameType, Item, enemies_of, teammate_of
+from ..game.observation import Observation
 
 NUM_PLANES = 19
 BOARD_ONE_HOT = (Item.PASSAGE, Item.RIGID, Item.WOOD, Item.BOMB, Item.FLAMES, Item.FOG,

@@ -28,13 +28,13 @@ import torch
 from torch.nn import functional as F
 from torch.utils.flop_counter import FlopCounterMode
 
+from ..data.schema import Batch
+from ..game.constants import NUM_ACTIONS
+from ..game.observation import empty_observations
+from ..rl.settings import PPOSettings
 from .bc import BCConfig, build_net, train_step
-from .data.schema import Batch
 from .features import NUM_PLANES
-from .game.constants import NUM_ACTIONS
-from .game.observation import empty_observations
 from .network import PommerNet
-from .rl.settings import PPOSettings
 
 PPO = PPOSettings()
 BC_BATCH = 512

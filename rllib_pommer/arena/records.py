@@ -1,0 +1,79 @@
+"""What a match's games did, seen from team A: one record per game, the match's summary with
+95% intervals, and the records file `evaluate --records` writes and the report reads."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from collections.abc import Iterator, Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .rates import wilson
+
+
+@dataclass
+class GameRecord:
+    """What one game did, seen from team A."""
+
+    game: int
+    seed: int
+    seats_a: list[int]
+    result: str  # "win", "loss" or "tie" for team A
+    length: int
+    died: list[bool]  # by seat
+    own_bomb_deaths: list[bool]  # by seat
+    bombs_laid: list[int]  # by seat
+    # The match, so a records file names what it holds (the report reads it from the rows).
+    team: str = ""
+    vs: str = ""
+    filters: list[str] = field(default_factory=list)
+
+
+def summarise(records: Sequence[GameRecord]) -> dict:
+    """Team A's rates with 95% CIs, mean length, own-bomb losses and bombs per agent."""
+    n = len(records)
+    out: dict = {"games": n}
+    for outcome in ("win", "loss", "tie"):
+        k = sum(r.result == outcome for r in records)
+        out[outcome] = k / n
+        out[f"{outcome}_ci95"] = list(wilson(k, n))
+    lengths = np.array([r.length for r in records], float)
+    out["mean_length"] = float(lengths.mean())
+    out["mean_length_ci95"] = _mean_ci(lengths)
+    a_seats = [(r, s) for r in records for s in r.seats_a]
+    b_seats = [(r, s) for r in records for s in range(4) if s not in r.seats_a]
+    out["own_bomb_deaths_a"] = sum(r.own_bomb_deaths[s] for r, s in a_seats)
+    games_with_own_death = sum(any(r.own_bomb_deaths[s] for s in r.seats_a) for r in records)
+    out["games_with_own_bomb_death_a"] = games_with_own_death / n
+    out["bombs_per_agent_a"] = float(np.mean([r.bombs_laid[s] for r, s in a_seats]))
+    out["bombs_per_agent_b"] = float(np.mean([r.bombs_laid[s] for r, s in b_seats]))
+    return out
+
+
+def _mean_ci(values: np.ndarray) -> list[float]:
+    half = 1.96 * values.std(ddof=1) / math.sqrt(len(values)) if len(values) > 1 else math.inf
+    return [float(values.mean() - half), float(values.mean() + half)]
+
+
+def record_rows(records: Sequence[GameRecord]) -> Iterator[dict]:
+    for record in records:
+        yield asdict(record)
+
+
+def write_records(path: Path, records: Sequence[GameRecord]) -> None:
+    """The rows of `record_rows` as a .csv file (lists as JSON) or, for any other suffix, JSON
+    Lines."""
+    rows = list(record_rows(records))
+    if path.suffix == ".csv":
+        with open(path, "w", newline="") as f:
+            writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+            writer.writeheader()
+            writer.writerows({k: json.dumps(v) if isinstance(v, list) else v
+                              for k, v in row.items()} for row in rows)
+    else:
+        with open(path, "w") as f:
+            f.writelines(json.dumps(row) + "\n" for row in rows)
