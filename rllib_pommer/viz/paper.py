@@ -67,9 +67,9 @@ PAPER_TABLES: dict[str, tuple[str, dict[str, dict[str, Cell]]]] = {
 
 
 def paper_table(team: str) -> tuple[str, dict[str, dict[str, Cell]]] | None:
-    """The paper's table our team `team` is measured against: by name, a versioned policy
-    (`imitation_v1`) by the name without its version."""
-    for name in (team, re.sub(r"_v\d+$", "", team)):
+    """The paper's table our team `team` is measured against: by name, a version or a variant
+    of a policy (`imitation_v1`, `imitation_dagger`) by the name without that suffix."""
+    for name in (team, re.sub(r"_(v\d+|dagger)$", "", team)):
         if name in PAPER_TABLES:
             return PAPER_TABLES[name]
     return None
