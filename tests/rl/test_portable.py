@@ -17,8 +17,11 @@ from pathlib import Path
 
 import pytest
 
+from rllib_pommer.rl.curriculum import load_curriculum
+
 REPO = Path(__file__).resolve().parents[2]
 CAMPAIGN = "campaign/paper"
+CURRICULUM = "paper"  # the campaign's schedule
 
 RESTORE = """
 import json, sys
@@ -27,6 +30,7 @@ import ray, torch
 from ray.rllib.algorithms.algorithm import Algorithm
 from ray.rllib.core.rl_module.rl_module import RLModule
 from rllib_pommer.rl.checkpoint_policy import load_checkpoint_net
+from ray.rllib.utils.metrics import ENV_RUNNER_RESULTS, NUM_EPISODES_LIFETIME
 from rllib_pommer.rl.rl_module import LEARNER
 
 checkpoint, weights = Path(sys.argv[1]), Path(sys.argv[2])
@@ -36,12 +40,14 @@ module = RLModule.from_checkpoint(checkpoint / "learner_group/learner/rl_module/
 ray.init(address="local", num_cpus=2, include_dashboard=False)
 try:
     algo = Algorithm.from_checkpoint(str(checkpoint))
+    algo.load_checkpoint(str(checkpoint))  # Tune's restore, which runs on_checkpoint_loaded
     learner = algo.learner_group._learner.module[LEARNER]
     print(json.dumps({
         "weights_visible": weights.exists(), "module_pi": same(module.pi),
         "module_source": module.pi_source, "algo_pi": same(learner.pi),
         "algo_source": learner.pi_source, "pi_frozen": learner.pi_frozen,
         "mapping_stage": algo.env_runner.config.policy_mapping_fn.stage,
+        "episodes": int(algo.metrics.peek((ENV_RUNNER_RESULTS, NUM_EPISODES_LIFETIME))),
         "played": sorted({e.module_id for episode in algo.env_runner.sample(
             num_timesteps=300, explore=True) for e in episode.agent_episodes.values()})}))
     algo.stop()
@@ -82,11 +88,15 @@ def test_the_committed_campaign_checkpoint_restores_without_its_weights_file(tmp
                           timeout=600)
     assert done.returncode == 0, done.stderr[-3000:]
     seen = json.loads(done.stdout.strip().splitlines()[-1])
+    # the campaign moves on between commits: the stage in force is the one its curriculum gives
+    # for the checkpoint's lifetime episode count
+    index = load_curriculum(CURRICULUM).stage_at(seen.pop("episodes"))
+    stage = load_curriculum(CURRICULUM).stages[index]
     assert seen == {"weights_visible": False, "module_pi": True, "module_source": "checkpoint",
                     "algo_pi": True, "algo_source": "checkpoint",
-                    "pi_frozen": True, "mapping_stage": 0,  # in the value warm-up, as it was
+                    "pi_frozen": stage.freeze_pi, "mapping_stage": index,
                     # and it plays: its scripted modules, restored by their import paths
-                    "played": ["learner", "simple", "suicide"]}
+                    "played": sorted({"learner", stage.teammate, stage.opponent})}
 
 
 def test_the_module_takes_pi_from_the_weights_or_a_checkpoint_and_never_trains_without(
