@@ -9,8 +9,9 @@ all of it again (idempotent and cheap, rllib-notes K2): the policy mapping on ev
 mode and filter probabilities on every env, and pi's freeze on every learner (requires_grad is not
 checkpointed). The algorithm's own config, frozen by RLlib, is left as built: it keeps the first
 stage's mapping, which nothing reads once the env runners exist (an algorithm restored from a
-checkpoint's config is set to its stage by `on_checkpoint_loaded`), and the callback needs no
-state of its own beyond the curriculum.
+checkpoint's config is set to its stage whenever its state is set, by Tune or by
+`Algorithm.from_checkpoint` alike), and the callback needs no state of its own beyond the
+curriculum.
 
 Each result names the stage in force from now on (`curriculum/stage`, `stage_name`) and the one
 the iteration sampled and trained in (`iteration_stage_name`, and its reward mode
@@ -86,9 +87,16 @@ class CurriculumCallback(RLlibCallback):
 
     def on_algorithm_init(self, *, algorithm, **kwargs) -> None:
         self.apply_stage(algorithm, self._lifetime_episodes(algorithm))
+        # Every restore (Tune's `load_checkpoint`, `Algorithm.from_checkpoint`,
+        # `restore_from_path`) ends in `set_state`, which brings the lifetime episode count
+        # back, and only Tune's calls `on_checkpoint_loaded` after it: the stage follows
+        # every set_state instead.
+        set_state = algorithm.set_state
 
-    def on_checkpoint_loaded(self, *, algorithm, **kwargs) -> None:
-        self.apply_stage(algorithm, self._lifetime_episodes(algorithm))
+        def set_state_and_stage(state):
+            set_state(state)
+            self.apply_stage(algorithm, self._lifetime_episodes(algorithm))
+        algorithm.set_state = set_state_and_stage
 
     def on_env_runners_recreated(self, *, algorithm, is_evaluation, **kwargs) -> None:
         if not is_evaluation:

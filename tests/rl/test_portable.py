@@ -39,8 +39,7 @@ same = lambda pi: all(torch.equal(pi.state_dict()[k], v) for k, v in expected.it
 module = RLModule.from_checkpoint(checkpoint / "learner_group/learner/rl_module/learner")
 ray.init(address="local", num_cpus=2, include_dashboard=False)
 try:
-    algo = Algorithm.from_checkpoint(str(checkpoint))
-    algo.load_checkpoint(str(checkpoint))  # Tune's restore, which runs on_checkpoint_loaded
+    algo = Algorithm.from_checkpoint(str(checkpoint))  # no Tune: the stage must follow anyway
     learner = algo.learner_group._learner.module[LEARNER]
     print(json.dumps({
         "weights_visible": weights.exists(), "module_pi": same(module.pi),
