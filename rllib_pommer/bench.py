@@ -1,4 +1,5 @@
-"""`python -m rllib_pommer.bench engine|agents|train|learn [--json]`: our speed, side by side.
+"""`python -m rllib_pommer.bench engine|agents|train|layout|learn [--json]`: our speed, side by
+side.
 
 Each target's measures live beside the code they measure; this job runs them, and for engine and
 agents compares with the reference's figures (tests/reference/reference_speed.json):
@@ -9,6 +10,9 @@ agents compares with the reference's figures (tests/reference/reference_speed.js
   (`agents/speed.py`);
 - `train`: the quick curriculum's PPO for a few iterations on the real env and on a zero-cost twin
   with the same spaces; env steps/s of both and their ratio (`rl/speed.py`);
+- `layout`: the quick curriculum's PPO on the real env sampled in the learner's process (0 env
+  runners, 1 learner thread) and by 2 remote env runners with 2 learner threads; env steps/s of
+  each and their ratio (`rl/speed.py`; meaningful on an otherwise idle machine);
 - `learn`: on a run's torch threads (one), the real RLlib PPO update (pi trainable, and frozen as
   in the value warm-up) and the real behaviour-cloning step, each beside its plain float32 NCHW
   torch baseline, and this core's float32 FLOP bound (`rl/speed.py`, `imitation/speed.py`).
@@ -79,6 +83,13 @@ def bench_train() -> dict:
     return train_speeds()
 
 
+def bench_layout() -> dict:
+    """PPO env steps/s with 0 env runners and 1 learner thread beside 2 and 2, one run."""
+    from .rl.speed import layout_speeds  # Ray and torch only for this target
+
+    return layout_speeds()
+
+
 def bench_learn() -> dict:
     """Learner samples/s: RLlib PPO and BC, each beside its plain-torch baseline, and the bound."""
     from .rl.speed import learner_speeds  # Ray and torch only for this target
@@ -104,6 +115,8 @@ TARGETS = {
     "engine": ("protocol (a): Team, 200 games x 3 runs", bench_engine),
     "agents": ("protocol (b): 4 SimpleAgents, 20 games x 3 runs", bench_agents),
     "train": ("PPO sampling + learning, real env vs zero-cost env", bench_train),
+    "layout": ("PPO env steps/s: 0 env runners + 1 learner thread vs 2 + 2 (an idle machine)",
+               bench_layout),
     "learn": ("learner samples/s, one torch thread, beside plain-torch baselines", bench_learn),
 }
 

@@ -32,10 +32,11 @@ HELP = {
     "resume": "continue the run in --out",
     "address": "an existing Ray cluster (HOST:PORT or 'auto')",
     "pi_weights": "pi state_dict to start from (overrides the file)",
-    "num_env_runners": "remote env runners (0: sample in the driver; use more on a cluster)",
+    "num_env_runners": "remote env runners (0: sample in the learner's process; 2 with "
+                       "--torch-threads 2 when the run has a 2-core machine to itself)",
     "seed": "default %(default)s",
     "num_cpus": "CPUs of the Ray instance started here (default %(default)s)",
-    "torch_threads": "torch threads per process (default %(default)s)",
+    "torch_threads": "torch threads of the learner (default %(default)s)",
 }
 
 

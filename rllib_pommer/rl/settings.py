@@ -71,7 +71,7 @@ class RunSettings:
     num_env_runners: int = 0  # 0: sample in the driver, right for a 2-core machine
     seed: int = 0
     num_cpus: int = 2  # of our own Ray instance
-    torch_threads: int = 1  # per process: batches are small, and more threads spin on 2 cores
+    torch_threads: int = 1  # the learner's (and the driver's): 2 with 2 env runners on 2 cores
 
     def __post_init__(self):
         for name, low in (("num_env_runners", 0), ("num_cpus", 1), ("torch_threads", 1)):

@@ -7,6 +7,9 @@ with the advantage estimation, then `num_epochs` passes of minibatches of 128 th
 pi trainable and with pi frozen (the value warm-up), beside the plain-torch baselines of
 `imitation/speed.py` on the same thread count. Samples/s count learner rows times epochs.
 
+`layout_speeds` times the whole loop on the real env for each way of placing it on the machine:
+sampling in the learner's process, or remote env runners sampling while the learner waits.
+
 `train_speeds(iterations)` builds the PPO config of a curriculum (default "quick", first stage:
 all four agents exposed, SimpleAgent opponents as stateful fixed modules, the learner's filters)
 twice, once on the real env and once on `ZeroCostEnv`, which has the same spaces, agents and
@@ -36,7 +39,7 @@ from .curriculum import load_curriculum
 from .env import ENV_NAME, PommeEnv
 from .rl_module import LEARNER
 from .settings import RunSettings
-from .training import init_ray
+from .training import cpus_per_env_runner, init_ray
 
 ZERO_COST_ENV = "pommerman_team_zero_cost"
 
@@ -112,6 +115,28 @@ def train_speeds(iterations: int = 3, curriculum: str = "quick") -> dict:
             "mean_episode_length": round(float(episode_length), 1),
             "real_env_steps_per_s": round(real, 1), "zero_cost_env_steps_per_s": round(zero, 1),
             "ratio": round(real / zero, 3)}
+
+
+def layout_speeds(iterations: int = 5, curriculum: str = "quick",
+                  layouts: tuple[tuple[int, int], ...] = ((0, 1), (2, 2))) -> dict:
+    """Env steps/s of the whole PPO loop on the real env for each (remote env runners, learner
+    torch threads), side by side in one Ray instance of `RunSettings.num_cpus` CPUs: how a run
+    that has the machine to itself should use it (rl/training.cpus_per_env_runner)."""
+    result = {"curriculum": curriculum, "iterations": iterations}
+    with _random_pi_weights() as weights:
+        plan = load_curriculum(curriculum)
+        for runners, threads in layouts:
+            layout = RunSettings(num_env_runners=runners, torch_threads=threads)
+            config = build_config(plan, pi_weights=weights, num_env_runners=runners,
+                                  cpus_per_env_runner=cpus_per_env_runner(layout),
+                                  learner_threads=threads)
+            speed, _ = _steps_per_second(config, iterations)
+            result[f"env_steps_per_s_{runners}_runners_{threads}_threads"] = round(speed, 1)
+    first, *others = [k for k in result if k.startswith("env_steps")]
+    for key in others:
+        ratio = result[key] / result[first]
+        result[f"ratio_{key.removeprefix('env_steps_per_s_')}"] = round(ratio, 3)
+    return result
 
 
 def _learner_rows(episodes) -> int:

@@ -228,6 +228,16 @@ def start_run(settings: RunSettings, say=print) -> tuple[Curriculum, Path]:
     return curriculum, out
 
 
+def cpus_per_env_runner(settings: RunSettings) -> float:
+    """Ray CPUs each remote env runner asks for. On a Ray instance of our own, the algorithm's
+    process takes one and the runners share the rest: they sample while the learner waits and
+    the learner trains while they wait (PPO is synchronous), so `--num-cpus 2
+    --num-env-runners 2` keeps both cores busy in both phases. On a cluster, one each."""
+    if settings.address is not None or settings.num_env_runners == 0:
+        return 1.0
+    return min(1.0, max(settings.num_cpus - 1, 1) / settings.num_env_runners)
+
+
 def train(curriculum: Curriculum, out: Path, settings: RunSettings):
     """Run (or resume, `settings.resume`) `curriculum` into the run directory `out`; Ray must be
     initialised."""
@@ -237,7 +247,9 @@ def train(curriculum: Curriculum, out: Path, settings: RunSettings):
     # disk always names the latest trial checkpoint and a SIGKILLed run resumes from it.
     os.environ.setdefault("TUNE_GLOBAL_CHECKPOINT_S", "0")
     config = build_config(curriculum, pi_weights=settings.pi_weights,
-                          num_env_runners=settings.num_env_runners, seed=settings.seed,
+                          num_env_runners=settings.num_env_runners,
+                          cpus_per_env_runner=cpus_per_env_runner(settings),
+                          learner_threads=settings.torch_threads, seed=settings.seed,
                           restoring=resumes_from_checkpoint(out, resume))
     check_run_dir(out, resume)
     if resume:
