@@ -63,13 +63,15 @@ def check_pi_weights(path: Path) -> Path:
 
 def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None,
                  num_env_runners: int = 0, cpus_per_env_runner: float = 1.0,
-                 learner_threads: int = 1, seed: int = 0, env: str = ENV_NAME,
+                 learner_cpus: int = 1, seed: int = 0, env: str = ENV_NAME,
                  restoring: bool = False) -> PPOConfig:
     """PPO for `curriculum`; `pi_weights` overrides the file's; `env` may name another env with
     the same spaces (the bench's zero-cost twin). `restoring`: the algorithm will load a
     checkpoint, which holds pi, so the imitation weights may be absent (rl_module.py).
     `num_env_runners` remote runners of `cpus_per_env_runner` Ray CPUs each sample while the
-    learner, in the algorithm's own process, trains on `learner_threads` torch threads."""
+    learner, in the algorithm's own process of `learner_cpus` CPUs, trains on as many torch
+    threads (learner.py). Both are values of keys every config has: Tune resumes a run only with
+    the key set it started with, so no key may be added here for a run already under way."""
     weights = Path(pi_weights) if pi_weights else curriculum.pi_weights
     weights = weights.resolve() if restoring else check_pi_weights(weights)
     first = curriculum.stages[0]
@@ -100,8 +102,8 @@ def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None
             num_epochs=ppo.num_epochs, train_batch_size_per_learner=ppo.train_batch_size,
             vf_loss_coeff=ppo.vf_loss_coeff, use_kl_loss=ppo.use_kl_loss,
             grad_clip=ppo.grad_clip)
-        .learners(learner_class=PommerPPOLearner,
-                  learner_config_dict={"torch_threads": learner_threads})
+        .learners(learner_class=PommerPPOLearner)
+        .resources(num_cpus_for_main_process=learner_cpus)
         .callbacks(partial(CurriculumCallback, curriculum))
         .debugging(seed=seed)
     )

@@ -21,9 +21,9 @@ class PommerPPOLearner(PPOTorchLearner):
     """RLlib's PPO torch learner with a fused Adam per module, which refuses to train a learner
     module whose pi has no weights (module docstring)."""
     def build(self) -> None:
-        # Ray gives an actor as many OpenMP threads as it has CPUs (1 for the algorithm's own
-        # process); the run's settings say how many the learner may use.
-        torch.set_num_threads(self.config.learner_config_dict.get("torch_threads", 1))
+        # The learner lives in the algorithm's own process (no remote learners): one torch
+        # thread per CPU that process holds (`--torch-threads`), whoever started it.
+        torch.set_num_threads(int(self.config.num_cpus_for_main_process))
         super().build()
 
     def configure_optimizers_for_module(self, module_id, config=None) -> None:

@@ -79,3 +79,6 @@ class RunSettings:
             if isinstance(value, bool) or not isinstance(value, int) or value < low:
                 raise ValueError(f"--{name.replace('_', '-')} must be {low} or more, "
                                  f"got {value!r}")
+        if self.address is None and self.torch_threads > self.num_cpus:
+            raise ValueError(f"--torch-threads {self.torch_threads} exceeds --num-cpus "
+                             f"{self.num_cpus}: the learner's process holds one CPU per thread")

@@ -129,7 +129,7 @@ def layout_speeds(iterations: int = 5, curriculum: str = "quick",
             layout = RunSettings(num_env_runners=runners, torch_threads=threads)
             config = build_config(plan, pi_weights=weights, num_env_runners=runners,
                                   cpus_per_env_runner=cpus_per_env_runner(layout),
-                                  learner_threads=threads)
+                                  learner_cpus=threads)
             speed, _ = _steps_per_second(config, iterations)
             result[f"env_steps_per_s_{runners}_runners_{threads}_threads"] = round(speed, 1)
     first, *others = [k for k in result if k.startswith("env_steps")]

@@ -230,12 +230,14 @@ def start_run(settings: RunSettings, say=print) -> tuple[Curriculum, Path]:
 
 def cpus_per_env_runner(settings: RunSettings) -> float:
     """Ray CPUs each remote env runner asks for. On a Ray instance of our own, the algorithm's
-    process takes one and the runners share the rest: they sample while the learner waits and
-    the learner trains while they wait (PPO is synchronous), so `--num-cpus 2
-    --num-env-runners 2` keeps both cores busy in both phases. On a cluster, one each."""
+    process takes `torch_threads` (its learner's threads) and the runners share the rest, if
+    any: PPO is synchronous, so the runners sample while the learner waits and the learner
+    trains while they wait, and `--num-env-runners 2 --torch-threads 2` keeps both cores of a
+    2-core machine busy in both phases. On a cluster, one each."""
     if settings.address is not None or settings.num_env_runners == 0:
         return 1.0
-    return min(1.0, max(settings.num_cpus - 1, 1) / settings.num_env_runners)
+    spare = max(settings.num_cpus - settings.torch_threads, 0)
+    return min(1.0, spare / settings.num_env_runners)
 
 
 def train(curriculum: Curriculum, out: Path, settings: RunSettings):
@@ -249,7 +251,7 @@ def train(curriculum: Curriculum, out: Path, settings: RunSettings):
     config = build_config(curriculum, pi_weights=settings.pi_weights,
                           num_env_runners=settings.num_env_runners,
                           cpus_per_env_runner=cpus_per_env_runner(settings),
-                          learner_threads=settings.torch_threads, seed=settings.seed,
+                          learner_cpus=settings.torch_threads, seed=settings.seed,
                           restoring=resumes_from_checkpoint(out, resume))
     check_run_dir(out, resume)
     if resume:

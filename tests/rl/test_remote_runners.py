@@ -4,6 +4,7 @@ curriculum still reaches every runner (the stage is pushed to each runner's own 
 
 from __future__ import annotations
 
+import pytest
 import torch
 
 from rllib_pommer.rl.config import build_config
@@ -14,15 +15,19 @@ from rllib_pommer.rl.training import cpus_per_env_runner
 
 def test_our_own_ray_instance_shares_its_cpus_between_the_learner_and_the_runners():
     assert cpus_per_env_runner(RunSettings(num_env_runners=2, num_cpus=2)) == 0.5
+    assert cpus_per_env_runner(
+        RunSettings(num_env_runners=2, num_cpus=2, torch_threads=2)) == 0.0
     assert cpus_per_env_runner(RunSettings(num_env_runners=2, num_cpus=8)) == 1.0
     assert cpus_per_env_runner(RunSettings(num_env_runners=4, address="auto")) == 1.0
+    with pytest.raises(ValueError, match="--torch-threads 3 exceeds --num-cpus 2"):
+        RunSettings(torch_threads=3)
 
 
 def test_a_curriculum_runs_on_two_remote_env_runners_and_a_two_thread_learner(
         ray_session, pi_weights):
     curriculum = load_curriculum("smoke")
     config = build_config(curriculum, pi_weights=pi_weights, num_env_runners=2,
-                          cpus_per_env_runner=0.5, learner_threads=2)
+                          cpus_per_env_runner=0.0, learner_cpus=2)
     algo = config.build_algo()
     try:
         results = []
