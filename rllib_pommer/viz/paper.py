@@ -68,8 +68,8 @@ PAPER_TABLES: dict[str, tuple[str, dict[str, dict[str, Cell]]]] = {
 
 def paper_table(team: str) -> tuple[str, dict[str, dict[str, Cell]]] | None:
     """The paper's table our team `team` is measured against: by name, a version or a variant
-    of a policy (`imitation_v1`, `imitation_dagger`) by the name without that suffix."""
-    for name in (team, re.sub(r"_(v\d+|dagger)$", "", team)):
+    of a policy (`imitation_v1`, `imitation_v2`) by the name without that suffix."""
+    for name in (team, re.sub(r"_v\d+$", "", team)):
         if name in PAPER_TABLES:
             return PAPER_TABLES[name]
     return None

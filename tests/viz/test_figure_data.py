@@ -218,7 +218,7 @@ def test_stage_figures_add_up_each_phase_and_weight_rates_by_episodes(tmp_path):
 
 def test_versions_of_our_teams_meet_the_paper_table_of_their_family():
     assert paper_table("imitation_v1") is paper_table("imitation") is PAPER_TABLES["imitation"]
-    assert paper_table("imitation_dagger") is PAPER_TABLES["imitation"]
+    assert paper_table("imitation_v2") is PAPER_TABLES["imitation"]
     assert paper_table("ppo_v2") is PAPER_TABLES["ppo"]
     assert paper_table("ppo_cautious") is None and paper_table("simple") is None
 
