@@ -9,8 +9,15 @@ and lr 3e-4 ended with every training game tied); GAE lambda 0.95; 4 epochs over
 env steps (~3,500 learner rows; all four agents step, and the learner's rows are the ones
 trained); value loss coefficient 1 with RLlib's default value clip 10 (returns are within
 [-1, 1]); no KL penalty (the clip does the work); gradient norm clip 10; 8 envs per env runner
-(batched inference, rllib-notes I); and 0 remote env runners on a 2-core machine (more help only
-on a bigger cluster: `num_env_runners`).
+(batched inference, rllib-notes I).
+
+Layout (`train --num-env-runners N --torch-threads T`, not PPO's arithmetic): by default the
+algorithm's process samples and learns on one thread, so two runs share a 2-core machine, one per
+core, which is the most work per hour when there are several runs to do. A run alone on the 2
+cores goes faster with 2 remote env runners and 2 learner threads (`bench layout`, quick
+curriculum, side by side: 1.36x and 1.59x the env steps/s of the default in two runs; 2 runners
+and 1 thread 1.37x; 1 runner and 2 threads 1.03x). Tune restores a trial with the config it
+started with, so a run keeps its layout when resumed (training.kept_layouts says so).
 
 Speed settings, none of which changes what PPO computes (`python -m rllib_pommer.bench learn`
 and `bench train`, one core, figures in the README):

@@ -209,6 +209,21 @@ def resumes_from_checkpoint(out: Path, resume: bool) -> bool:
     return resume and bool(trials) and all(any(t.glob("checkpoint_*")) for t in trials)
 
 
+def kept_layouts(out: Path, settings: RunSettings) -> list[str]:
+    """On --resume, one line per trial whose layout (remote env runners, learner threads) differs
+    from the one asked for: Tune restores a trial with the config it was started with, so those
+    options shape new runs only."""
+    notes = []
+    for trial in trial_dirs(out) if settings.resume else []:
+        params = json.loads((trial / "params.json").read_text())
+        started = (params.get("num_env_runners", 0), params.get("num_cpus_for_main_process", 1))
+        if started != (settings.num_env_runners, settings.torch_threads):
+            notes.append(f"note: {trial.name} resumes as it started, with {started[0]} env "
+                         f"runners and {started[1]} learner threads (Tune restores a trial's "
+                         f"config); --num-env-runners and --torch-threads shape new runs")
+    return notes
+
+
 def start_run(settings: RunSettings, say=print) -> tuple[Curriculum, Path]:
     """Everything a run checks before Ray starts, then Ray: the curriculum and the run directory
     (default runs/<curriculum name>), after ending what a SIGKILLed run in that directory left
@@ -220,6 +235,8 @@ def start_run(settings: RunSettings, say=print) -> tuple[Curriculum, Path]:
     if ended:
         say(f"ended {len(ended)} Ray processes left by the killed run in {out}")
     check_run_dir(out, settings.resume)
+    for note in kept_layouts(out, settings):
+        say(note)
     if not resumes_from_checkpoint(out, settings.resume):  # else pi comes from the checkpoint
         check_pi_weights(settings.pi_weights or curriculum.pi_weights)
     init_ray(settings.address, num_cpus=settings.num_cpus, torch_threads=settings.torch_threads)
