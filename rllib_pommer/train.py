@@ -3,6 +3,7 @@
     python -m rllib_pommer.train [--curriculum NAME|FILE] [--out RUN_DIR] [--resume]
                                  [--address RAY_ADDRESS] [--pi-weights FILE]
     python -m rllib_pommer.train --out RUN_DIR --pack
+    python -m rllib_pommer.train --out RUN_DIR --export policies/NAME
 
 Curricula are TOML files in `curriculum/` (default "quick"; "paper" is the paper's schedule). The
 run directory (default runs/<curriculum name>) gets RLlib checkpoints and TensorBoard logs;
@@ -11,7 +12,8 @@ by its directory: `python -m rllib_pommer.evaluate --team runs/quick --vs static
 
 `--pack` shrinks a stopped run to what resuming needs (newest checkpoint, stage checkpoints, a
 small history.csv of the results), so it can be committed or copied and continued with
-`--resume` on another machine, at another path.
+`--resume` on another machine, at another path. `--export` ships a run's learner as a policy
+file and a plain state_dict, as `policies/imitation` is.
 
 The options are the fields of `rl/settings.RunSettings`; PPO's own settings are the curriculum's
 (`rl/settings.PPOSettings`, overridable in its [ppo] table).
@@ -46,9 +48,14 @@ def main(argv: list[str] | None = None) -> int:
     add_options(parser, RunSettings, HELP)
     parser.add_argument("--pack", action="store_true",
                         help="shrink the stopped run in --out for another machine, then exit")
+    parser.add_argument("--export", type=Path, metavar="POLICY_DIR",
+                        help="write the learner of the run in --out as a policy (POLICY_DIR/pi.pt, "
+                             "POLICY_DIR.toml; e.g. policies/ppo), then exit")
     args = parser.parse_args(argv)
     if args.pack:
         return _pack(parser, args.out)
+    if args.export:
+        return _export(parser, args.out, args.export)
 
     # Imports after parsing, so --help is instant.
     import ray
@@ -96,6 +103,20 @@ def _pack(parser: argparse.ArgumentParser, out: Path | None) -> int:
         print(f"{out / trial}: kept {checkpoint}, results folded into history.csv")
     print(f"{out}: {size / 2**20:.1f} MiB; continue anywhere with "
           f"`python -m rllib_pommer.train --curriculum NAME --out {out} --resume`")
+    return 0
+
+
+def _export(parser: argparse.ArgumentParser, out: Path | None, target: Path) -> int:
+    if out is None:
+        parser.error("--export needs --out RUN_DIR")
+    from .rl.checkpoint_policy import export_policy
+
+    try:
+        weights, policy_file = export_policy(out, target)
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    print(f"wrote {weights} and {policy_file}; play it with --team {policy_file}")
     return 0
 
 

@@ -91,6 +91,27 @@ def load_checkpoint_net(path: str | Path) -> PommerNet:
     return net.eval()
 
 
+def export_policy(source: str | Path, target: str | Path) -> tuple[Path, Path]:
+    """Ship the learner of a checkpoint, trial or run folder as a policy like `imitation`:
+    `target/pi.pt`, a plain state_dict that `torch.load(weights_only=True)` reads, and
+    `target.toml` (kind learned, sampling, as the arena plays a run folder). Existing files
+    are never replaced."""
+    checkpoint = latest_checkpoint(source).resolve()
+    net = load_checkpoint_net(checkpoint)
+    target = Path(target)
+    weights, policy_file = target / "pi.pt", target.with_suffix(".toml")
+    for path in (weights, policy_file):
+        if path.exists():
+            raise ValueError(f"{path} exists; export to another name or move it aside")
+    target.mkdir(parents=True, exist_ok=True)
+    torch.save(net.state_dict(), weights)
+    policy_file.write_text(
+        f'kind = "learned"\nweights = "{target.name}/pi.pt"\ngreedy = false\n'
+        f'description = "PPO learner exported from {checkpoint.parent.name}/{checkpoint.name}; '
+        f'see {target.name}/MODEL_CARD.md"\n')
+    return weights, policy_file
+
+
 @cache
 def _shared_policy(path: Path, greedy: bool) -> LearnedPolicy:
     return LearnedPolicy(load_checkpoint_net(path), greedy)
