@@ -17,7 +17,8 @@ core, which is the most work per hour when there are several runs to do. A run a
 cores goes faster with 2 remote env runners and 2 learner threads (`bench layout`, quick
 curriculum, side by side: 1.36x and 1.59x the env steps/s of the default in two runs; 2 runners
 and 1 thread 1.37x; 1 runner and 2 threads 1.03x). Tune restores a trial with the config it
-started with, so a run keeps its layout when resumed (training.kept_layouts says so).
+started with, so a run keeps its number of env runners when resumed (training.kept_layouts says
+so); the learner's threads are the command's.
 
 Speed settings, none of which changes what PPO computes (`python -m rllib_pommer.bench learn`
 and `bench train`, one core, figures in the README):
@@ -70,14 +71,13 @@ def check_pi_weights(path: Path) -> Path:
 
 def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None,
                  num_env_runners: int = 0, cpus_per_env_runner: float = 1.0,
-                 learner_cpus: int = 1, seed: int = 0, env: str = ENV_NAME,
+                 seed: int = 0, env: str = ENV_NAME,
                  restoring: bool = False) -> PPOConfig:
     """PPO for `curriculum`; `pi_weights` overrides the file's; `env` may name another env with
     the same spaces (the bench's zero-cost twin). `restoring`: the algorithm will load a
     checkpoint, which holds pi, so the imitation weights may be absent (rl_module.py).
     `num_env_runners` remote runners of `cpus_per_env_runner` Ray CPUs each sample while the
-    learner, in the algorithm's own process of `learner_cpus` CPUs, trains on as many torch
-    threads (learner.py). Both are values of keys every config has: Tune resumes a run only with
+    learner waits (its torch threads: names.LEARNER_THREADS_ENV). Tune resumes a run only with
     the key set it started with, so no key may be added here for a run already under way."""
     weights = Path(pi_weights) if pi_weights else curriculum.pi_weights
     weights = weights.resolve() if restoring else check_pi_weights(weights)
@@ -110,7 +110,6 @@ def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None
             vf_loss_coeff=ppo.vf_loss_coeff, use_kl_loss=ppo.use_kl_loss,
             grad_clip=ppo.grad_clip)
         .learners(learner_class=PommerPPOLearner)
-        .resources(num_cpus_for_main_process=learner_cpus)
         .callbacks(partial(CurriculumCallback, curriculum))
         .debugging(seed=seed)
     )

@@ -11,9 +11,12 @@ a missing weights file is only an error once training would start from random we
 
 from __future__ import annotations
 
+import os
+
 import torch
 from ray.rllib.algorithms.ppo.torch.ppo_torch_learner import PPOTorchLearner
 
+from .names import LEARNER_THREADS_ENV
 from .rl_module import LEARNER
 
 
@@ -21,9 +24,9 @@ class PommerPPOLearner(PPOTorchLearner):
     """RLlib's PPO torch learner with a fused Adam per module, which refuses to train a learner
     module whose pi has no weights (module docstring)."""
     def build(self) -> None:
-        # The learner lives in the algorithm's own process (no remote learners): one torch
-        # thread per CPU that process holds (`--torch-threads`), whoever started it.
-        torch.set_num_threads(int(self.config.num_cpus_for_main_process))
+        # Ray gives the algorithm's process, where this learner lives, one OpenMP thread per
+        # CPU it holds (one); `train --torch-threads` says how many it may use.
+        torch.set_num_threads(int(os.environ.get(LEARNER_THREADS_ENV, "1")))
         super().build()
 
     def configure_optimizers_for_module(self, module_id, config=None) -> None:

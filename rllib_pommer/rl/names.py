@@ -11,3 +11,7 @@ LEARNER = "learner"  # module id of the trained policy; fixed modules are named 
 ENV_NAME = "pommerman_team"  # the RLlib env's registered name (rl/env.py)
 # How an agent's last step is paid (envs/team.MultiAgentTeam): the paper's shaping, or the engine's.
 REWARD_MODES = ("shaped", "raw")
+# The learner's torch threads, for every process of a run's Ray job (rl/training.init_ray):
+# how the machine is used, not what PPO computes, so it is no key of the run's config and applies
+# to a resumed run too (learner.py reads it).
+LEARNER_THREADS_ENV = "RLLIB_POMMER_LEARNER_THREADS"

@@ -21,6 +21,7 @@ identical, so the ratio of env steps/s says how much of the budget the game and 
 
 from __future__ import annotations
 
+import os
 import tempfile
 import time
 from collections.abc import Iterator
@@ -37,6 +38,7 @@ from ..imitation.network import PommerNet
 from .config import build_config
 from .curriculum import load_curriculum
 from .env import ENV_NAME, PommeEnv
+from .names import LEARNER_THREADS_ENV
 from .rl_module import LEARNER
 from .settings import RunSettings
 from .training import cpus_per_env_runner, init_ray
@@ -128,9 +130,12 @@ def layout_speeds(iterations: int = 5, curriculum: str = "quick",
         for runners, threads in layouts:
             layout = RunSettings(num_env_runners=runners, torch_threads=threads)
             config = build_config(plan, pi_weights=weights, num_env_runners=runners,
-                                  cpus_per_env_runner=cpus_per_env_runner(layout),
-                                  learner_cpus=threads)
-            speed, _ = _steps_per_second(config, iterations)
+                                  cpus_per_env_runner=cpus_per_env_runner(layout))
+            os.environ[LEARNER_THREADS_ENV] = str(threads)  # read by the learner in this process
+            try:
+                speed, _ = _steps_per_second(config, iterations)
+            finally:
+                del os.environ[LEARNER_THREADS_ENV]
             result[f"env_steps_per_s_{runners}_runners_{threads}_threads"] = round(speed, 1)
     first, *others = [k for k in result if k.startswith("env_steps")]
     for key in others:

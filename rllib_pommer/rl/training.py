@@ -35,6 +35,7 @@ from ..viz.training import HISTORY_FILE, write_summary
 from . import ray_session
 from .config import build_config, check_pi_weights
 from .curriculum import Curriculum, load_curriculum
+from .names import LEARNER_THREADS_ENV
 from .settings import RunSettings
 
 STOP_KEY = "env_runners/num_episodes_lifetime"
@@ -63,6 +64,7 @@ def init_ray(address: str | None, *, num_cpus: int = RunSettings.num_cpus,
     not start, a `RayStartError`."""
     torch.set_num_threads(torch_threads)
     torch.set_flush_denormal(True)
+    job_env = {"env_vars": {LEARNER_THREADS_ENV: str(torch_threads)}}  # for learner.py
     if address is not None and address != "auto":
         host, _, port = address.removeprefix("ray://").rpartition(":")
         try:
@@ -72,9 +74,10 @@ def init_ray(address: str | None, *, num_cpus: int = RunSettings.num_cpus,
                              f"HOST:PORT of a running cluster's head, or 'auto'") from None
     try:
         if address is None:
-            ray.init(address="local", num_cpus=num_cpus, include_dashboard=False)
+            ray.init(address="local", num_cpus=num_cpus, include_dashboard=False,
+                     runtime_env=job_env)
         else:
-            ray.init(address=address)
+            ray.init(address=address, runtime_env=job_env)
     except Exception as exc:  # Ray raises many types here; each becomes one line
         if address is not None and "AuthToken" in f"{exc} {exc.__cause__}":
             raise ValueError(
@@ -210,17 +213,17 @@ def resumes_from_checkpoint(out: Path, resume: bool) -> bool:
 
 
 def kept_layouts(out: Path, settings: RunSettings) -> list[str]:
-    """On --resume, one line per trial whose layout (remote env runners, learner threads) differs
-    from the one asked for: Tune restores a trial with the config it was started with, so those
-    options shape new runs only."""
+    """On --resume, one line per trial whose number of remote env runners differs from the one
+    asked for: Tune restores a trial with the config it was started with, so that option shapes
+    new runs only (the learner's threads, outside the config, follow the command)."""
     notes = []
     for trial in trial_dirs(out) if settings.resume else []:
         params = json.loads((trial / "params.json").read_text())
-        started = (params.get("num_env_runners", 0), params.get("num_cpus_for_main_process", 1))
-        if started != (settings.num_env_runners, settings.torch_threads):
-            notes.append(f"note: {trial.name} resumes as it started, with {started[0]} env "
-                         f"runners and {started[1]} learner threads (Tune restores a trial's "
-                         f"config); --num-env-runners and --torch-threads shape new runs")
+        started = params.get("num_env_runners", 0)
+        if started != settings.num_env_runners:
+            notes.append(f"note: {trial.name} resumes as it started, with {started} env "
+                         f"runners (Tune restores a trial's config); --num-env-runners shapes "
+                         f"new runs")
     return notes
 
 
@@ -247,14 +250,13 @@ def start_run(settings: RunSettings, say=print) -> tuple[Curriculum, Path]:
 
 def cpus_per_env_runner(settings: RunSettings) -> float:
     """Ray CPUs each remote env runner asks for. On a Ray instance of our own, the algorithm's
-    process takes `torch_threads` (its learner's threads) and the runners share the rest, if
-    any: PPO is synchronous, so the runners sample while the learner waits and the learner
-    trains while they wait, and `--num-env-runners 2 --torch-threads 2` keeps both cores of a
-    2-core machine busy in both phases. On a cluster, one each."""
+    process takes one and the runners share the rest: PPO is synchronous, so the runners sample
+    while the learner waits and the learner trains, on `--torch-threads` threads, while they
+    wait; `--num-env-runners 2 --torch-threads 2` keeps both cores of a 2-core machine busy in
+    both phases. (Ray refuses a runner of 0 CPUs.) On a cluster, one each."""
     if settings.address is not None or settings.num_env_runners == 0:
         return 1.0
-    spare = max(settings.num_cpus - settings.torch_threads, 0)
-    return min(1.0, spare / settings.num_env_runners)
+    return min(1.0, max(settings.num_cpus - 1, 1) / settings.num_env_runners)
 
 
 def train(curriculum: Curriculum, out: Path, settings: RunSettings):
@@ -267,8 +269,7 @@ def train(curriculum: Curriculum, out: Path, settings: RunSettings):
     os.environ.setdefault("TUNE_GLOBAL_CHECKPOINT_S", "0")
     config = build_config(curriculum, pi_weights=settings.pi_weights,
                           num_env_runners=settings.num_env_runners,
-                          cpus_per_env_runner=cpus_per_env_runner(settings),
-                          learner_cpus=settings.torch_threads, seed=settings.seed,
+                          cpus_per_env_runner=cpus_per_env_runner(settings), seed=settings.seed,
                           restoring=resumes_from_checkpoint(out, resume))
     check_run_dir(out, resume)
     if resume:

@@ -6,20 +6,21 @@ run keeps the layout it started with, and says so."""
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 
 import pytest
 import torch
 
 from rllib_pommer.rl.config import build_config
 from rllib_pommer.rl.curriculum import load_curriculum
+from rllib_pommer.rl.names import LEARNER_THREADS_ENV
 from rllib_pommer.rl.settings import RunSettings
 from rllib_pommer.rl.training import cpus_per_env_runner, kept_layouts
 
 
 def test_our_own_ray_instance_shares_its_cpus_between_the_learner_and_the_runners():
     assert cpus_per_env_runner(RunSettings(num_env_runners=2, num_cpus=2)) == 0.5
-    assert cpus_per_env_runner(
-        RunSettings(num_env_runners=2, num_cpus=2, torch_threads=2)) == 0.0
     assert cpus_per_env_runner(RunSettings(num_env_runners=2, num_cpus=8)) == 1.0
     assert cpus_per_env_runner(RunSettings(num_env_runners=4, address="auto")) == 1.0
     with pytest.raises(ValueError, match="--torch-threads 3 exceeds --num-cpus 2"):
@@ -29,20 +30,31 @@ def test_our_own_ray_instance_shares_its_cpus_between_the_learner_and_the_runner
 def test_a_resumed_run_says_it_keeps_the_layout_it_started_with(tmp_path):
     trial = tmp_path / "PPO_x"
     trial.mkdir()
-    (trial / "params.json").write_text(json.dumps({"num_env_runners": 0,
-                                                   "num_cpus_for_main_process": 1}))
+    (trial / "params.json").write_text(json.dumps({"num_env_runners": 0}))
     asked = RunSettings(resume=True, num_env_runners=2, torch_threads=2)
     (note,) = kept_layouts(tmp_path, asked)
-    assert "PPO_x resumes as it started, with 0 env runners and 1 learner threads" in note
-    assert kept_layouts(tmp_path, RunSettings(resume=True)) == []
+    assert "PPO_x resumes as it started, with 0 env runners" in note
+    assert kept_layouts(tmp_path, RunSettings(resume=True, torch_threads=2)) == []
     assert kept_layouts(tmp_path, RunSettings(num_env_runners=2)) == []  # not a resume
 
 
+def test_tune_can_place_the_two_runner_layout_on_two_cpus(pi_weights):
+    """Tune asks Ray for a placement group of the algorithm's bundles: each must hold some
+    resource (Ray refuses an empty one) and together they must fit our own Ray's 2 CPUs."""
+    layout = RunSettings(num_env_runners=2, torch_threads=2)
+    config = build_config(load_curriculum("smoke"), pi_weights=pi_weights, num_env_runners=2,
+                          cpus_per_env_runner=cpus_per_env_runner(layout))
+    bundles = config.algo_class.default_resource_request(config).bundles
+    assert len(bundles) == 3 and all(any(v > 0 for v in b.values()) for b in bundles)
+    assert sum(b.get("CPU", 0) for b in bundles) <= layout.num_cpus
+
+
 def test_a_curriculum_runs_on_two_remote_env_runners_and_a_two_thread_learner(
-        ray_session, pi_weights):
+        ray_session, pi_weights, monkeypatch):
     curriculum = load_curriculum("smoke")
     config = build_config(curriculum, pi_weights=pi_weights, num_env_runners=2,
-                          cpus_per_env_runner=0.0, learner_cpus=2)
+                          cpus_per_env_runner=0.5)
+    monkeypatch.setenv(LEARNER_THREADS_ENV, "2")  # what init_ray gives the run's processes
     algo = config.build_algo()
     try:
         results = []
@@ -62,3 +74,15 @@ def test_a_curriculum_runs_on_two_remote_env_runners_and_a_two_thread_learner(
     assert last["curriculum"]["iteration_stage_name"] == "static"
     assert last["env_runners"]["num_module_steps_sampled"]["static"] > 0
     assert {"learner_win", "learner_loss", "learner_tie"} <= set(last["env_runners"])
+
+
+def test_init_ray_hands_the_learner_threads_to_every_process_of_the_run():
+    code = ("import os, ray\nfrom rllib_pommer.rl.training import init_ray\n"
+            "init_ray(None, torch_threads=2)\n"
+            f"read = ray.remote(lambda: os.environ.get({LEARNER_THREADS_ENV!r}))\n"
+            "print(ray.get(read.remote()))\n"
+            "ray.shutdown()\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.strip().splitlines()[-1] == "2"

@@ -73,7 +73,7 @@ def test_the_committed_campaign_resumes_with_the_ppo_settings_it_started_with():
 
 
 @pytest.mark.parametrize("layout", [
-    {}, {"num_env_runners": 2, "cpus_per_env_runner": 0.0, "learner_cpus": 2}])
+    {}, {"num_env_runners": 2, "cpus_per_env_runner": 0.5}])
 def test_the_committed_campaign_resumes_under_tunes_key_check(layout):
     """Tune's `Tuner.restore(param_space=...)` refuses a config whose flattened key set differs
     from the one the experiment started with: a key added to `build_config` (even an empty
