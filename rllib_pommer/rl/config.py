@@ -17,9 +17,9 @@ core, which is the most work per hour when there are several runs to do. A run a
 cores goes faster with 2 remote env runners and 2 learner threads (`bench layout`, quick
 curriculum, side by side: 1.36x and 1.59x the env steps/s of the default in two runs; 2 runners
 and 1 thread 1.37x; 1 runner and 2 threads 1.03x; the paper curriculum's ETA on its progress
-line, alone, 13 h 33 min with the default and 9 h 56 min with 2 + 2). Tune restores a trial with the config it
-started with, so a run keeps its number of env runners when resumed (training.kept_layouts says
-so); the learner's threads are the command's.
+line, alone, 13 h 33 min with the default and 9 h 56 min with 2 + 2). Tune restores a trial
+with the config it started with, so a run keeps its number of env runners when resumed
+(training.kept_layouts says so); the learner's threads are the command's.
 
 Speed settings, none of which changes what PPO computes (`python -m rllib_pommer.bench learn`
 and `bench train`, one core, figures in the README):
