@@ -311,13 +311,13 @@ def _toml_string(text: str) -> str:
     return json.dumps(text, ensure_ascii=False)
 
 
-def write_policy_file(out: Path, description: str) -> Path:
+def write_policy_file(out: Path, description: str, greedy: bool = True) -> Path:
     """`<out name>.toml` beside the weights folder `out`: the policy file (kind "learned") by
-    which the arena, training and serving find the clone by name (agents/registry.py)."""
+    which the arena, training and serving find the policy by name (agents/registry.py)."""
     policy = out.parent / f"{out.name}.toml"
-    # greedy: a clone plays SimpleAgent's most likely action (sampling won 0.165 of 200 games
-    # against SimpleAgent, greedy play 0.290, with v1's first-epoch weights)
+    # greedy by default: a clone plays SimpleAgent's most likely action (sampling won 0.165 of
+    # 200 games against SimpleAgent, greedy play 0.290, with v1's first-epoch weights)
     policy.write_text(f'kind = "learned"\nweights = {_toml_string(f"{out.name}/{WEIGHTS_FILE}")}\n'
-                      f'greedy = true\ndescription = {_toml_string(description)}\n',
-                      encoding="utf-8")
+                      f'greedy = {str(greedy).lower()}\n'
+                      f'description = {_toml_string(description)}\n', encoding="utf-8")
     return policy

@@ -96,19 +96,21 @@ def export_policy(source: str | Path, target: str | Path) -> tuple[Path, Path]:
     `target/pi.pt`, a plain state_dict that `torch.load(weights_only=True)` reads, and
     `target.toml` (kind learned, sampling, as the arena plays a run folder). Existing files
     are never replaced."""
+    # bc's policy-file writer; imported here, since bc loads TensorBoard and the dataset reader,
+    # which playing a checkpoint never needs
+    from ..imitation.bc import WEIGHTS_FILE, write_policy_file
+
     checkpoint = latest_checkpoint(source).resolve()
     net = load_checkpoint_net(checkpoint)
     target = Path(target)
-    weights, policy_file = target / "pi.pt", target.with_suffix(".toml")
+    weights, policy_file = target / WEIGHTS_FILE, target.with_suffix(".toml")
     for path in (weights, policy_file):
         if path.exists():
             raise ValueError(f"{path} exists; export to another name or move it aside")
     target.mkdir(parents=True, exist_ok=True)
     torch.save(net.state_dict(), weights)
-    policy_file.write_text(
-        f'kind = "learned"\nweights = "{target.name}/pi.pt"\ngreedy = false\n'
-        f'description = "PPO learner exported from {checkpoint.parent.name}/{checkpoint.name}; '
-        f'see {target.name}/MODEL_CARD.md"\n')
+    write_policy_file(target, f"PPO learner exported from {checkpoint.parent.name}/"
+                              f"{checkpoint.name}; see {target.name}/MODEL_CARD.md", greedy=False)
     return weights, policy_file
 
 

@@ -24,8 +24,9 @@ class PommerPPOLearner(PPOTorchLearner):
     """RLlib's PPO torch learner with a fused Adam per module, which refuses to train a learner
     module whose pi has no weights (module docstring)."""
     def build(self) -> None:
-        # Ray gives the algorithm's process, where this learner lives, one OpenMP thread per
-        # CPU it holds (one); `train --torch-threads` says how many it may use.
+        # Ray gives the algorithm's process, where this learner lives (and samples, without
+        # remote env runners), one OpenMP thread per CPU it holds (one); `train
+        # --torch-threads` says how many it may use.
         torch.set_num_threads(int(os.environ.get(LEARNER_THREADS_ENV, "1")))
         super().build()
 

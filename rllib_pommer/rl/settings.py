@@ -68,7 +68,7 @@ class RunSettings:
     resume: bool = False
     address: str | None = None  # None: a Ray instance of our own on this machine
     pi_weights: Path | None = None  # None: the curriculum's
-    num_env_runners: int = 0  # 0: sample in the driver, right for a 2-core machine
+    num_env_runners: int = 0  # 0: sample in the learner's process, one run per core
     seed: int = 0
     num_cpus: int = 2  # of our own Ray instance
     torch_threads: int = 1  # the learner's (and the driver's): 2 with 2 env runners on 2 cores
@@ -81,4 +81,4 @@ class RunSettings:
                                  f"got {value!r}")
         if self.address is None and self.torch_threads > self.num_cpus:
             raise ValueError(f"--torch-threads {self.torch_threads} exceeds --num-cpus "
-                             f"{self.num_cpus}: the learner's process holds one CPU per thread")
+                             f"{self.num_cpus}: threads beyond the CPUs only wait on each other")
