@@ -6,7 +6,9 @@
 Each cell is an arena match with seats balanced, written as `<team>[+filters]__vs__<opponent>.jsonl`
 plus the `--json` summary beside it (`.json`), the layout `rllib_pommer.report` reads to print the
 table next to the paper's numbers. Finished cells are skipped, so an interrupted run resumes.
-Opponents default to the paper's Table 2 rows. Not part of CI (about a minute per 1000-game cell).
+Opponents default to the rows of the paper's table for the team (`imitation`: Table 2, `ppo`:
+Table 3) that name a policy we have (never Skynet; `ppo_cautious` once it is shipped), else to the
+scripted rows of Table 2. Not part of CI (about a minute per 1000-game cell).
 """
 
 from __future__ import annotations
@@ -16,10 +18,29 @@ import json
 import sys
 from pathlib import Path
 
+from rllib_pommer.agents.registry import resolve_policy
 from rllib_pommer.evaluate import main as evaluate
+from rllib_pommer.viz.paper import paper_table
 
 OPPONENTS = ("static", "simple_nobomb", "simple", "simple_nobomb_action", "simple_action")
 VARIANTS = ((), ("jitter",), ("action",), ("jitter", "action"))
+
+
+def _exists(policy: str) -> bool:
+    try:
+        resolve_policy(policy)
+    except ValueError:
+        return False
+    return True
+
+
+def default_opponents(team_name: str) -> list[str]:
+    """The paper's rows for the team that we can field (told on stderr which are left out)."""
+    rows = list((paper_table(team_name) or ("", dict.fromkeys(OPPONENTS)))[1])
+    missing = [row for row in rows if not _exists(row)]
+    if missing:
+        print(f"left out (no such policy here): {', '.join(missing)}", file=sys.stderr)
+    return [row for row in rows if row not in missing]
 
 
 def main() -> int:
@@ -28,13 +49,13 @@ def main() -> int:
     parser.add_argument("--team", required=True)
     parser.add_argument("--games", type=int, default=1000)
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--opponents", nargs="+", default=list(OPPONENTS))
+    parser.add_argument("--opponents", nargs="+", help="default: the paper's rows for the team")
     parser.add_argument("--out", type=Path, required=True)
     parser.add_argument("--workers", type=int, default=None, help="processes (default: cores)")
     args = parser.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
     team_name = Path(args.team).stem
-    for vs in args.opponents:
+    for vs in args.opponents or default_opponents(team_name):
         for filters in VARIANTS:
             stem = "+".join((team_name, *filters)) + f"__vs__{vs}"
             records, summary = args.out / f"{stem}.jsonl", args.out / f"{stem}.json"

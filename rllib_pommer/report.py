@@ -12,6 +12,10 @@ Each input is classified by its content:
   the filters;
 - a .jsonl[.gz] file of game replays (`evaluate --record K`) gives Fig. 5, the position and bomb
   heatmaps per opponent, and a picture and a viewer of its first game.
+
+`--card POLICY_DIR` instead redraws the model card of a policy that `train --export` shipped
+(POLICY_DIR/MODEL_CARD.md: its training from the folder itself, the results tables and Fig. 4
+from the record files given).
 """
 
 from __future__ import annotations
@@ -20,18 +24,35 @@ import argparse
 import sys
 from pathlib import Path
 
-from .viz.report import write_report
+from .viz.model_card import write_model_card
+from .viz.report import classify, write_report
+
+
+def _records(paths: list[Path]) -> list[Path]:
+    found = classify(paths)
+    if found["trials"] or found["replays"]:
+        raise ValueError("--card takes arena record files only (its training comes from the "
+                         "policy folder)")
+    return found["records"]
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m rllib_pommer.report", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("inputs", nargs="+", type=Path,
+    parser.add_argument("inputs", nargs="*", type=Path,
                         help="Tune run directories, arena record files, replay files")
-    parser.add_argument("--out", type=Path, required=True, help="directory for report.md + PNGs")
+    where = parser.add_mutually_exclusive_group(required=True)
+    where.add_argument("--out", type=Path, help="directory for report.md + PNGs")
+    where.add_argument("--card", type=Path, metavar="POLICY_DIR",
+                       help="redraw this exported policy's MODEL_CARD.md; inputs: record files")
     args = parser.parse_args(argv)
+    if args.out and not args.inputs:
+        parser.error("--out needs inputs")
     try:
-        report = write_report(args.inputs, args.out)
+        if args.card:
+            report = write_model_card(args.card, _records(args.inputs))
+        else:
+            report = write_report(args.inputs, args.out)
     except (ValueError, OSError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

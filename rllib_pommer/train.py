@@ -13,7 +13,8 @@ by its directory: `python -m rllib_pommer.evaluate --team runs/quick --vs static
 `--pack` shrinks a stopped run to what resuming needs (newest checkpoint, stage checkpoints, a
 small history.csv of the results), so it can be committed or copied and continued with
 `--resume` on another machine, at another path. `--export` ships a run's learner as a policy
-file and a plain state_dict, as `policies/imitation` is.
+file and a plain state_dict, as `policies/imitation` is, with a model card (its Fig. 3 and stage
+table; `python -m rllib_pommer.report --card POLICY_DIR RECORDS...` adds its results tables).
 
 The options are the fields of `rl/settings.RunSettings`; PPO's own settings are the curriculum's
 (`rl/settings.PPOSettings`, overridable in its [ppo] table).
@@ -112,11 +113,11 @@ def _export(parser: argparse.ArgumentParser, out: Path | None, target: Path) -> 
     from .rl.checkpoint_policy import export_policy
 
     try:
-        weights, policy_file = export_policy(out, target)
+        weights, policy_file, card = export_policy(out, target)
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    print(f"wrote {weights} and {policy_file}; play it with --team {policy_file}")
+    print(f"wrote {weights}, {policy_file} and {card}; play it with --team {policy_file}")
     return 0
 
 

@@ -15,7 +15,11 @@ running code.
 
 from __future__ import annotations
 
+import dataclasses
+import json
 import pickle
+import re
+import subprocess
 from functools import cache
 from pathlib import Path
 
@@ -24,8 +28,13 @@ import torch
 from ..agents.registry import PolicySpec, register_kind
 from ..imitation.learned import LearnedAgent, LearnedPolicy
 from ..imitation.network import PommerNet
+from ..viz.training import Trial, read_trial, write_summary
+from .curriculum import Curriculum, load_curriculum
 
 MODULE_STATE = Path("learner_group/learner/rl_module/learner/module_state.pkl")
+ALGORITHM_STATE = "algorithm_state.pkl"
+# How params.json records the CurriculumCallback partial of rl/config.py (its repr).
+CURRICULUM_IN_PARAMS = re.compile(r"Curriculum\(name='([^']+)'")
 
 
 def latest_checkpoint(path: str | Path) -> Path:
@@ -54,6 +63,8 @@ class StateUnpickler(pickle.Unpickler):
         ("numpy.core.numeric", "_frombuffer"),
         ("numpy._core.multiarray", "_reconstruct"),
         ("numpy.core.multiarray", "_reconstruct"),
+        ("numpy._core.multiarray", "scalar"),  # in algorithm_state.pkl's metrics
+        ("numpy.core.multiarray", "scalar"),
     }
 
     def find_class(self, module: str, name: str):
@@ -64,7 +75,8 @@ class StateUnpickler(pickle.Unpickler):
 
 
 def read_module_state(state_file: Path) -> dict:
-    """The saved state of an RLlib module, or a ValueError naming the file and the problem."""
+    """The saved state of an RLlib module (or of the algorithm: `algorithm_state.pkl`), or a
+    ValueError naming the file and the problem."""
     try:
         with state_file.open("rb") as f:
             state = StateUnpickler(f).load()
@@ -91,17 +103,63 @@ def load_checkpoint_net(path: str | Path) -> PommerNet:
     return net.eval()
 
 
-def export_policy(source: str | Path, target: str | Path) -> tuple[Path, Path]:
+def checkpoint_iteration(checkpoint: Path) -> int:
+    """The training iteration a checkpoint folder was taken at (its algorithm_state.pkl)."""
+    state_file = Path(checkpoint) / ALGORITHM_STATE
+    iteration = read_module_state(state_file).get("training_iteration")
+    if not isinstance(iteration, int) or iteration < 1:
+        raise ValueError(f"{state_file}: no training_iteration (found {iteration!r})")
+    return iteration
+
+
+def _run_curriculum(trial: Path) -> Curriculum:
+    """The curriculum a trial trained on: named in the callback its params.json records."""
+    params = trial / "params.json"
+    found = CURRICULUM_IN_PARAMS.search(params.read_text()) if params.is_file() else None
+    if not found:
+        raise ValueError(f"{params}: names no curriculum (a run of `python -m "
+                         f"rllib_pommer.train` records its CurriculumCallback there)")
+    return load_curriculum(found.group(1))
+
+
+def _git(folder: Path, *args: str) -> str:
+    done = subprocess.run(["git", "-C", str(folder), *args], capture_output=True, text=True)
+    return done.stdout.strip() if done.returncode == 0 else ""
+
+
+def _source(policy: str, checkpoint: Path, iteration: int, curriculum: Curriculum) -> dict:
+    """What `viz/model_card.py` says of where a policy came from."""
+    run = checkpoint.parents[1]
+    return {
+        "policy": policy, "run": run.name, "trial": checkpoint.parent.name,
+        "checkpoint": f"{checkpoint.parent.name}/{checkpoint.name}", "iteration": iteration,
+        "curriculum": {"name": curriculum.name, "description": curriculum.description,
+                       "stages": [dataclasses.asdict(stage) for stage in curriculum.stages]},
+        "exported_at_commit": _git(run, "rev-parse", "--short", "HEAD") or "unknown",
+        "run_commits": _git(run, "log", "--format=%h", "--", ".").split(),
+    }
+
+
+def export_policy(source: str | Path, target: str | Path) -> tuple[Path, Path, Path]:
     """Ship the learner of a checkpoint, trial or run folder as a policy like `imitation`:
-    `target/pi.pt`, a plain state_dict that `torch.load(weights_only=True)` reads, and
-    `target.toml` (kind learned, sampling, as the arena plays a run folder). Existing files
-    are never replaced."""
-    # bc's policy-file writer; imported here, since bc loads TensorBoard and the dataset reader,
-    # which playing a checkpoint never needs
+    `target/pi.pt`, a plain state_dict that `torch.load(weights_only=True)` reads,
+    `target.toml` (kind learned, sampling, as the arena plays a run folder) and the model card
+    `target/MODEL_CARD.md` with what it is drawn from (viz/model_card.py): the trial's rows up to
+    the checkpoint and `source.json`. Existing weights or policy files are never replaced."""
+    # imported here: bc loads TensorBoard and the dataset reader, the card matplotlib, which
+    # playing a checkpoint never needs
     from ..imitation.bc import WEIGHTS_FILE, write_policy_file
+    from ..viz.model_card import CARD_FILE, SOURCE_FILE, TRAINING_DIR, write_model_card
 
     checkpoint = latest_checkpoint(source).resolve()
     net = load_checkpoint_net(checkpoint)
+    iteration = checkpoint_iteration(checkpoint)
+    trial = read_trial(checkpoint.parent)
+    rows = [row for row in trial.rows if float(row["training_iteration"]) <= iteration]
+    if not rows or float(rows[-1]["training_iteration"]) != iteration:
+        raise ValueError(f"{trial.path}: no result row for iteration {iteration}, where "
+                         f"{checkpoint.name} was taken (a run still writing? export it stopped)")
+    curriculum = _run_curriculum(checkpoint.parent)
     target = Path(target)
     weights, policy_file = target / WEIGHTS_FILE, target.with_suffix(".toml")
     for path in (weights, policy_file):
@@ -110,8 +168,11 @@ def export_policy(source: str | Path, target: str | Path) -> tuple[Path, Path]:
     target.mkdir(parents=True, exist_ok=True)
     torch.save(net.state_dict(), weights)
     write_policy_file(target, f"PPO learner exported from {checkpoint.parent.name}/"
-                              f"{checkpoint.name}; see {target.name}/MODEL_CARD.md", greedy=False)
-    return weights, policy_file
+                              f"{checkpoint.name}; see {target.name}/{CARD_FILE}", greedy=False)
+    write_summary(Trial(trial.path, rows), target / TRAINING_DIR / trial.name)
+    (target / SOURCE_FILE).write_text(json.dumps(
+        _source(target.name, checkpoint, iteration, curriculum), indent=1) + "\n")
+    return weights, policy_file, write_model_card(target)
 
 
 @cache

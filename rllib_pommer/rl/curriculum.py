@@ -73,6 +73,13 @@ class Curriculum:
     ppo: PPOSettings
 
     @property
+    def description(self) -> str:
+        """The file's `description`, read again from it: a field would change the pickled
+        Curriculum that a run under way restores (Tune keeps it in the run's config)."""
+        with self.path.open("rb") as f:
+            return tomllib.load(f).get("description", "")
+
+    @property
     def total_episodes(self) -> int:
         return sum(stage.episodes for stage in self.stages)
 

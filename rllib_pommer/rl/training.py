@@ -21,7 +21,6 @@ from __future__ import annotations
 import json
 import os
 import pickletools
-import re
 import shutil
 import socket
 import time
@@ -33,6 +32,7 @@ from ray import tune
 
 from ..viz.training import HISTORY_FILE, write_summary
 from . import ray_session
+from .checkpoint_policy import checkpoint_iteration
 from .config import build_config, check_pi_weights
 from .curriculum import Curriculum, load_curriculum
 from .names import LEARNER_THREADS_ENV
@@ -297,9 +297,15 @@ def train(curriculum: Curriculum, out: Path, settings: RunSettings):
     return result
 
 
-def _checkpoint_number(path: Path) -> int:
-    match = re.fullmatch(r"checkpoint_(\d+)", path.name)
-    return int(match.group(1)) if match else -1
+def _checkpoint_age(path: Path) -> tuple[int, float]:
+    """A checkpoint's (training iteration, mtime), to find the newest: not its number, which
+    Tune restarts below the highest one on a resume (a resumed run wrote checkpoint_000036 after
+    the checkpoint_000037 it resumed from). One that cannot be read (cut short) comes first."""
+    try:
+        iteration = checkpoint_iteration(path)
+    except (ValueError, OSError):
+        iteration = -1
+    return iteration, path.stat().st_mtime
 
 
 def pack_run(out: Path) -> dict:
@@ -310,7 +316,7 @@ def pack_run(out: Path) -> dict:
         raise ValueError(f"--pack: no run in {out}")
     kept = {}
     for trial in trial_dirs(out):
-        checkpoints = sorted(trial.glob("checkpoint_*"), key=_checkpoint_number)
+        checkpoints = sorted(trial.glob("checkpoint_*"), key=_checkpoint_age)
         write_summary(trial, trial, HISTORY_FILE)
         results = trial / "result.json"
         if results.is_file():  # Tune reads the last result when it restores the trial

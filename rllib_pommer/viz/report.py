@@ -64,7 +64,8 @@ def classify(paths: list[Path]) -> dict[str, list[Path]]:
     return found
 
 
-def _tables_and_fig4(records: list[Path], out: Path) -> Iterator[str]:
+def tables_section(records: list[Path], out: Path) -> Iterator[str]:
+    """Tables 2 and 3 beside the paper's, and Fig. 4 per team (PNGs into `out`)."""
     outcomes = load_outcomes(records)
     yield "## Win / loss / tie (the paper's Tables 2 and 3)"
     yield ("Each cell: team A's win / loss / tie rates; ours over n games with their 95% Wilson "
@@ -80,23 +81,27 @@ def _tables_and_fig4(records: list[Path], out: Path) -> Iterator[str]:
             yield f"![Fig. 4 for {team}]({name})"
 
 
-def _fig3(paths: list[Path], out: Path) -> Iterator[str]:
+def fig3_section(paths: list[Path], out: Path, summaries: bool = True) -> Iterator[str]:
+    """Fig. 3 and the stage table of the trials in `paths` (PNG into `out`); `summaries`: also
+    keep each trial's rows, small, in `out`/runs/<run> (a card's trials are kept already)."""
     trials = [read_trial(path) for path in paths]
     plot_training([training_curve(trial) for trial in trials], out / "fig3_training.png")
     named = Counter(trial.name for trial in trials)
-    for k, trial in enumerate(trials):  # the figure's data
+    for k, trial in enumerate(trials if summaries else ()):  # the figure's data
         write_summary(trial, out / SUMMARIES / (
             trial.name if named[trial.name] == 1 else f"{trial.name}_{k}"))
     yield "## Training reward (the paper's Fig. 3)"
-    yield f"From {len(paths)} trial(s): " + ", ".join(f"`{path}`" for path in paths)
+    shown = [path.relative_to(out) if path.is_relative_to(out) else path for path in paths]
+    yield f"From {len(paths)} trial(s): " + ", ".join(f"`{path}`" for path in shown)
     yield "![Fig. 3](fig3_training.png)"
     yield (f"One axis per reward kind (shaped and raw returns are not on one scale). Each "
            f"iteration logs RLlib's mean return of the learner's last {RLLIB_WINDOW} episodes; "
            f"a curve averages those over the last {WINDOW:,} episodes (each iteration weighted "
            f"by the episodes it finished), restarted at each phase.")
     yield training_table([f for trial in trials for f in stage_figures(trial)])
-    yield (f"Each run's curve and training figures per iteration are in `{SUMMARIES}/<run>/"
-           f"progress.csv` (a trial folder this report reads again).")
+    if summaries:
+        yield (f"Each run's curve and training figures per iteration are in `{SUMMARIES}/<run>/"
+               f"progress.csv` (a trial folder this report reads again).")
 
 
 def _fig5_and_game(replays: list[Path], out: Path) -> Iterator[str]:
@@ -119,7 +124,7 @@ def write_report(paths: list[Path], out: Path) -> Path:
     found = classify(paths)
     out.mkdir(parents=True, exist_ok=True)
     parts = ["# Report: our runs in the paper's figures and tables"]
-    makers = {"records": _tables_and_fig4, "trials": _fig3, "replays": _fig5_and_game}
+    makers = {"records": tables_section, "trials": fig3_section, "replays": _fig5_and_game}
     for kind, maker in makers.items():
         if found[kind]:
             parts += list(maker(found[kind], out))

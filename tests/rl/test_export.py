@@ -1,31 +1,66 @@
 """`train --out RUN --export policies/NAME`: a run's learner shipped as `imitation` is, a plain
-state_dict and a policy file that the arena plays, never over an existing policy."""
+state_dict and a policy file that the arena plays, never over an existing policy, with a model
+card drawn from the run up to the exported checkpoint; `report --card` redraws it with results."""
 
 from __future__ import annotations
 
+import csv
+import json
 import pickle
+import re
 from collections import OrderedDict
+from pathlib import Path
 
+import numpy as np
+import pytest
 import torch
 
 from rllib_pommer.arena.match import MatchSpec, play_match
 from rllib_pommer.imitation.network import PommerNet
-from rllib_pommer.rl.checkpoint_policy import MODULE_STATE
+from rllib_pommer.report import main as report
+from rllib_pommer.rl.checkpoint_policy import (
+    ALGORITHM_STATE,
+    MODULE_STATE,
+    checkpoint_iteration,
+    latest_checkpoint,
+    load_checkpoint_net,
+)
 from rllib_pommer.train import main
+from rllib_pommer.viz.training import read_trial
+
+COLUMNS = ("training_iteration", "time_total_s", "env_runners/num_env_steps_sampled_lifetime",
+           "env_runners/num_episodes_lifetime", "env_runners/module_episode_returns_mean/learner",
+           "curriculum/iteration_stage_name", "curriculum/iteration_reward")
 
 
-def _fake_run(run, pi: PommerNet):
-    """A run folder whose newest checkpoint holds `pi` (and a value net) as RLlib saves them."""
+def _fake_run(run: Path, pi: PommerNet, iterations: int = 4, checkpoint_at: int = 3) -> Path:
+    """A run folder as `train` leaves it, with the smoke curriculum: `iterations` result rows,
+    an empty older checkpoint and a newer one taken at iteration `checkpoint_at` holding `pi` (and
+    a value net) as RLlib saves them."""
+    trial = run / "PPO_pommerman_team_00000"
     state = OrderedDict((f"pi.{k}", v.numpy()) for k, v in pi.state_dict().items())
     state["vf.head.weight"] = torch.zeros(1, 4).numpy()
-    for number in (1, 2):  # an older checkpoint too: the newest one is exported
-        path = run / "PPO_trial" / f"checkpoint_00000{number}" / MODULE_STATE
-        path.parent.mkdir(parents=True)
-        with path.open("wb") as f:
+    for number, iteration in ((1, 1), (2, checkpoint_at)):
+        path = trial / f"checkpoint_00000{number}"
+        (path / MODULE_STATE).parent.mkdir(parents=True)
+        with (path / MODULE_STATE).open("wb") as f:
             pickle.dump(state if number == 2 else OrderedDict(), f)
+        with (path / ALGORITHM_STATE).open("wb") as f:  # numpy scalars, as RLlib's metrics hold
+            pickle.dump({"training_iteration": iteration,
+                         "metrics_logger": {"stats": {"x": np.float64(1.5)}}}, f)
+    (trial / "params.json").write_text(json.dumps(
+        {"callbacks": "functools.partial(<class 'rllib_pommer.rl.callbacks.CurriculumCallback'>, "
+                      "Curriculum(name='smoke', path=PosixPath('/elsewhere/smoke.toml'), ...)"}))
+    with open(trial / "progress.csv", "w", newline="") as f:
+        writer = csv.writer(f)
+        writer.writerow(COLUMNS)
+        for k in range(1, iterations + 1):
+            writer.writerow([k, 10.0 * k, 400 * k, 6 * k, 0.1 * k,
+                             "warmup" if k <= 2 else "static", "shaped"])
+    return trial
 
 
-def test_export_writes_a_plain_state_dict_and_a_policy_the_arena_plays(tmp_path, capsys):
+def test_export_writes_a_plain_state_dict_a_policy_the_arena_plays_and_a_card(tmp_path, capsys):
     torch.manual_seed(3)
     pi = PommerNet()
     _fake_run(tmp_path / "run", pi)
@@ -39,6 +74,70 @@ def test_export_writes_a_plain_state_dict_and_a_policy_the_arena_plays(tmp_path,
     assert "checkpoint_000002" in policy_file.read_text()
     records = list(play_match(MatchSpec(team=str(policy_file), vs="static", games=2), workers=1))
     assert len(records) == 2
+
+    # the card: training up to the checkpoint's iteration (3), not the row after it
+    source = json.loads((target / "source.json").read_text())
+    assert (source["iteration"], source["curriculum"]["name"]) == (3, "smoke")
+    assert [s["name"] for s in source["curriculum"]["stages"]] == ["warmup", "static"]
+    card = (target / "MODEL_CARD.md").read_text()
+    assert "18 of 24 games" in card and "1,200" in card  # iteration 3: 6 x 3 games, 400 x 3 steps
+    assert "| run | warmup | 2 | 12 |" in card and "| run | static | 1 | 6 |" in card
+    assert (target / "fig3_training.png").stat().st_size > 0
+    assert "Not played yet" in card
+
     capsys.readouterr()
     assert main(["--out", str(tmp_path / "run"), "--export", str(target)]) == 2
     assert f"{target / 'pi.pt'} exists" in capsys.readouterr().err
+
+
+def test_report_card_adds_the_results_and_keeps_notes(tmp_path, capsys):
+    _fake_run(tmp_path / "run", PommerNet())
+    target = tmp_path / "ppo"
+    assert main(["--out", str(tmp_path / "run"), "--export", str(target)]) == 0
+    (target / "NOTES.md").write_text("Written by a person.\n")
+    records = tmp_path / "ppo+action__vs__static.jsonl"
+    with records.open("w") as f:
+        for game, result in enumerate(("win", "win", "loss", "tie")):
+            f.write(json.dumps({"game": game, "seats_a": [0, 2], "result": result, "team": "ppo",
+                                "vs": "static", "filters": ["action"]}) + "\n")
+    assert report(["--card", str(target), str(records)]) == 0
+    card = (target / "MODEL_CARD.md").read_text()
+    assert "Table 3: PPO team" in card and "0.500 / 0.250 / 0.250 (n=4)" in card
+    assert card.rstrip().endswith("Written by a person.")
+    assert "Not played yet" not in card
+    capsys.readouterr()
+    assert report(["--card", str(target), str(tmp_path / "run")]) == 2
+    assert "record files only" in capsys.readouterr().err
+
+
+def test_export_names_what_is_missing(tmp_path, capsys):
+    trial = _fake_run(tmp_path / "run", PommerNet())
+    (trial / "params.json").write_text("{}")
+    assert main(["--out", str(tmp_path / "run"), "--export", str(tmp_path / "ppo")]) == 2
+    assert "params.json: names no curriculum" in capsys.readouterr().err
+    with (trial / "checkpoint_000002" / ALGORITHM_STATE).open("wb") as f:
+        pickle.dump({"training_iteration": 9}, f)
+    assert main(["--out", str(tmp_path / "run"), "--export", str(tmp_path / "ppo")]) == 2
+    assert "no result row for iteration 9, where checkpoint_000002" in capsys.readouterr().err
+    (trial / "checkpoint_000002" / ALGORITHM_STATE).write_bytes(pickle.dumps({"other": 1}))
+    with pytest.raises(ValueError, match="algorithm_state.pkl: no training_iteration"):
+        checkpoint_iteration(trial / "checkpoint_000002")
+
+
+def test_the_committed_campaign_exports_to_its_checkpoint(tmp_path, committed_campaign):
+    """The project's own run: the card's figures are the history's at the checkpoint."""
+    target = tmp_path / "ppo"
+    assert main(["--out", str(committed_campaign), "--export", str(target)]) == 0
+    checkpoint = latest_checkpoint(committed_campaign)
+    iteration = checkpoint_iteration(checkpoint)
+    row = next(r for r in read_trial(checkpoint.parent).rows
+               if int(float(r["training_iteration"])) == iteration)
+    games = int(float(row["env_runners/num_episodes_lifetime"]))
+    card = (target / "MODEL_CARD.md").read_text()
+    assert re.search(rf"{games:,} of 100,000 games", card)
+    assert f"iteration {iteration:,}" in card
+    kept = read_trial(target / "training" / "paper").rows
+    assert int(float(kept[-1]["training_iteration"])) == iteration
+    net = load_checkpoint_net(checkpoint)
+    weights = torch.load(target / "pi.pt", weights_only=True)
+    assert all(torch.equal(weights[k], v) for k, v in net.state_dict().items())

@@ -6,22 +6,18 @@ test_resume.py.)"""
 
 from __future__ import annotations
 
-import io
 import json
 import re
 import shlex
 import subprocess
 import sys
-import tarfile
 from pathlib import Path
 
 import pytest
 
 from rllib_pommer.rl.curriculum import load_curriculum
 
-REPO = Path(__file__).resolve().parents[2]
-CAMPAIGN = "campaign/paper"
-CURRICULUM = "paper"  # the campaign's schedule
+from .conftest import CURRICULUM
 
 RESTORE = """
 import json, sys
@@ -55,15 +51,6 @@ finally:
 """
 
 
-def _committed_pack(into: Path) -> Path:
-    """The campaign folder as committed (the working copy may be a live run's)."""
-    archive = subprocess.run(["git", "archive", "HEAD", CAMPAIGN], cwd=REPO, capture_output=True,
-                             check=True).stdout
-    with tarfile.open(fileobj=io.BytesIO(archive)) as tar:
-        tar.extractall(into, filter="data")
-    return into / CAMPAIGN
-
-
 def _hiding(path: Path) -> list[str]:
     """A command prefix under which `path` does not exist: where it does, its folder is covered
     by an empty tmpfs in a private mount namespace (root only; nothing outside sees it)."""
@@ -76,8 +63,9 @@ def _hiding(path: Path) -> list[str]:
     return ["unshare", "-m", "sh", "-c", f'{cover} && exec "$@"', "sh"]
 
 
-def test_the_committed_campaign_checkpoint_restores_without_its_weights_file(tmp_path):
-    run = _committed_pack(tmp_path)
+def test_the_committed_campaign_checkpoint_restores_without_its_weights_file(
+        tmp_path, committed_campaign):
+    run = committed_campaign
     (trial,) = [p for p in run.iterdir() if (p / "params.json").is_file()]
     checkpoint = max(trial.glob("checkpoint_*"))
     named = re.search(r"'pi_weights': '([^']+)'", (trial / "params.json").read_text())

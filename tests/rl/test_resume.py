@@ -178,3 +178,24 @@ def test_a_packed_run_resumes_at_another_path(tmp_path, pi_weights):
                              "--vs", "static", "--games", "2", "--workers", "1"], cwd=tmp_path,
                             capture_output=True, text=True, timeout=300, env=elsewhere)
     assert played.returncode == 0 and "2 games" in played.stdout, played.stderr[-2000:]
+
+
+def test_pack_keeps_the_newest_checkpoint_by_iteration_not_by_number(tmp_path):
+    """A resumed run numbers its checkpoints from below the one it resumed from (seen in the
+    campaign: checkpoint_000036 written after checkpoint_000037); packing keeps the later one."""
+    import pickle
+
+    from rllib_pommer.rl.checkpoint_policy import ALGORITHM_STATE
+    from rllib_pommer.rl.training import pack_run
+
+    trial = tmp_path / "run" / "PPO_trial"
+    for name, iteration in (("checkpoint_000035", 1100), ("checkpoint_000037", 1125),
+                            ("checkpoint_000036", 1150)):
+        (trial / name).mkdir(parents=True)
+        with (trial / name / ALGORITHM_STATE).open("wb") as f:
+            pickle.dump({"training_iteration": iteration}, f)
+    (trial / "params.json").write_text("{}")
+    (trial / "progress.csv").write_text("training_iteration,time_total_s\n1150,1.0\n")
+    (tmp_path / "run" / "tuner.pkl").write_bytes(b"")  # what Tune looks for
+    assert pack_run(tmp_path / "run") == {"PPO_trial": "checkpoint_000036"}
+    assert sorted(p.name for p in trial.glob("checkpoint_*")) == ["checkpoint_000036"]

@@ -1,0 +1,130 @@
+"""The model card of a PPO policy shipped from a run (`train --export`), redrawn with its results
+table by `report --card`.
+
+A shipped policy folder carries what its card is drawn from, so the card can be redrawn after the
+run has moved on or is gone:
+
+- `source.json` (written by `rl/checkpoint_policy.export_policy`): the run, trial and checkpoint
+  it came from, the checkpoint's iteration, the curriculum (name, description, every stage), the
+  commit it was exported at and the commits that packed the run;
+- `training/<run>/progress.csv`: the run's summary rows up to that checkpoint (`viz/training.py`),
+  which give Fig. 3 and the stage table;
+- optionally `NOTES.md`: words of a person, kept as they are under "Notes".
+
+Arena records (`evaluate --records`, e.g. `benchmarks/paper_table.py --team ppo`) add the paper's
+Table 3 layout and Fig. 4.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+from .report import fig3_section, tables_section
+from .training import find_trials, read_trial
+
+CARD_FILE = "MODEL_CARD.md"
+SOURCE_FILE = "source.json"
+TRAINING_DIR = "training"
+NOTES_FILE = "NOTES.md"
+SOURCE_KEYS = ("policy", "run", "checkpoint", "iteration", "curriculum", "exported_at_commit",
+               "run_commits")
+
+
+def read_source(policy_dir: Path) -> dict:
+    """The policy folder's `source.json`, with every key the card uses, or a ValueError naming
+    the file and what is wrong."""
+    path = Path(policy_dir) / SOURCE_FILE
+    try:
+        source = json.loads(path.read_text())
+    except (OSError, ValueError) as exc:
+        raise ValueError(f"{path}: not readable ({exc}); write it with `python -m "
+                         f"rllib_pommer.train --out RUN --export {policy_dir}`") from None
+    missing = [key for key in SOURCE_KEYS if not isinstance(source, dict) or key not in source]
+    if missing:
+        raise ValueError(f"{path}: missing {missing}")
+    return source
+
+
+def _last_row(policy_dir: Path) -> dict:
+    trials = find_trials(Path(policy_dir) / TRAINING_DIR)
+    if len(trials) != 1:
+        raise ValueError(f"{policy_dir / TRAINING_DIR}: expected the summary of one trial, "
+                         f"found {len(trials)}")
+    rows = read_trial(trials[0]).rows
+    if not rows:
+        raise ValueError(f"{trials[0]}: no training rows")
+    return rows[-1]
+
+
+def _number(row: dict, key: str) -> float:
+    try:
+        return float(row.get(key))
+    except (TypeError, ValueError):
+        return math.nan
+
+
+def _schedule(curriculum: dict) -> str:
+    lines = ["| stage | games | opponents | teammate | reward | action filter | jitter "
+             "correction | pi |", "|---" * 8 + "|"]
+    for s in curriculum["stages"]:
+        lines.append(f"| {s['name']} | {s['episodes']:,} | `{s['opponent']}` | `{s['teammate']}` "
+                     f"| {s['reward']} | {s['action_filter']:.0%} of games | {s['jitter']:.0%} of "
+                     f"games | {'frozen' if s['freeze_pi'] else 'trained'} |")
+    return "\n".join(lines)
+
+
+def _preface(policy_dir: Path, source: dict) -> list[str]:
+    row = _last_row(policy_dir)
+    curriculum = source["curriculum"]
+    total = sum(s["episodes"] for s in curriculum["stages"])
+    games = int(_number(row, "env_runners/num_episodes_lifetime"))
+    hours = _number(row, "time_total_s") / 3600
+    finished = games >= total
+    status = ("the whole curriculum" if finished else
+              f"**{games / total:.0%} of the curriculum: training goes on**, and this card and "
+              f"the weights are replaced as it does")
+    commits = source["run_commits"]
+    steps = int(_number(row, "env_runners/num_env_steps_sampled_lifetime"))
+    title = curriculum["description"].rstrip(".")
+    return [
+        f"# Model card: `{source['policy']}` ({title})",
+        f"The learner of the PPO run `{source['run']}` (curriculum `{curriculum['name']}`), "
+        f"exported from `{source['checkpoint']}` at training iteration {source['iteration']:,}: "
+        f"{games:,} of {total:,} games, {status}. The paper's CNN (`pi.pt`, a plain state_dict "
+        f"for `torch.load(weights_only=True)`), 19 feature planes, sampling its actions as it "
+        f"did in training; the variants `{source['policy']}_jitter`, `_action` and "
+        f"`_jitter_action` add the paper's filters.",
+        "## Training",
+        f"- games: {games:,}; env steps: {steps:,}; training time: {hours:.1f} hours (the run's "
+        f"`time_total_s`: its iterations, sessions added up)\n"
+        f"- code: exported at commit `{source['exported_at_commit']}`; the run was packed and "
+        f"committed {len(commits)} time(s) ({', '.join(f'`{c}`' for c in commits) or 'never'}), "
+        f"each session training with the code of the commit before its pack\n"
+        f"- curriculum `{curriculum['name']}`:",
+        _schedule(curriculum),
+    ]
+
+
+def write_model_card(policy_dir: Path, records: list[Path] = ()) -> Path:
+    """`policy_dir`/MODEL_CARD.md with Fig. 3 and the stage table from its training summary, the
+    results tables and Fig. 4 from `records` (none: a pointer to the command that plays them),
+    and NOTES.md; PNGs beside it."""
+    policy_dir = Path(policy_dir)
+    source = read_source(policy_dir)
+    parts = _preface(policy_dir, source)
+    parts += list(fig3_section(find_trials(policy_dir / TRAINING_DIR), policy_dir, summaries=False))
+    if records:
+        parts += list(tables_section(list(records), policy_dir))
+    else:
+        parts += ["## Results",
+                  f"Not played yet: `python benchmarks/paper_table.py --team {source['policy']} "
+                  f"--games 1000 --out RECORDS` (the paper's rows), then `python -m "
+                  f"rllib_pommer.report --card {policy_dir} RECORDS/*.jsonl`."]
+    notes = policy_dir / NOTES_FILE
+    if notes.is_file():
+        parts += ["## Notes", notes.read_text().strip()]
+    card = policy_dir / CARD_FILE
+    card.write_text("\n\n".join(parts) + "\n")
+    return card
