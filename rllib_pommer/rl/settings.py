@@ -82,3 +82,8 @@ class RunSettings:
         if self.address is None and self.torch_threads > self.num_cpus:
             raise ValueError(f"--torch-threads {self.torch_threads} exceeds --num-cpus "
                              f"{self.num_cpus}: threads beyond the CPUs only wait on each other")
+        if self.address is None and self.num_env_runners and self.num_cpus < 2:
+            raise ValueError(f"--num-env-runners {self.num_env_runners} needs --num-cpus 2 or "
+                             f"more: the learner's process takes one Ray CPU and each runner "
+                             f"needs a share of another (with {self.num_cpus}, Tune would wait "
+                             f"for CPUs forever)")

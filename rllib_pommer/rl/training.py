@@ -256,7 +256,7 @@ def cpus_per_env_runner(settings: RunSettings) -> float:
     both phases. (Ray refuses a runner of 0 CPUs.) On a cluster, one each."""
     if settings.address is not None or settings.num_env_runners == 0:
         return 1.0
-    return min(1.0, max(settings.num_cpus - 1, 1) / settings.num_env_runners)
+    return min(1.0, (settings.num_cpus - 1) / settings.num_env_runners)  # num_cpus >= 2 here
 
 
 def train(curriculum: Curriculum, out: Path, settings: RunSettings):

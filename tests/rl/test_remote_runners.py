@@ -25,6 +25,11 @@ def test_our_own_ray_instance_shares_its_cpus_between_the_learner_and_the_runner
     assert cpus_per_env_runner(RunSettings(num_env_runners=4, address="auto")) == 1.0
     with pytest.raises(ValueError, match="--torch-threads 3 exceeds --num-cpus 2"):
         RunSettings(torch_threads=3)
+    # the learner's process takes one Ray CPU: no room for a runner on a 1-CPU instance
+    with pytest.raises(ValueError, match="--num-env-runners 1 needs --num-cpus 2 or more"):
+        RunSettings(num_env_runners=1, num_cpus=1)
+    assert RunSettings(num_cpus=1).num_env_runners == 0  # sampling in its process: fine
+    assert RunSettings(num_env_runners=1, num_cpus=1, address="auto").num_cpus == 1  # a cluster
 
 
 def test_a_resumed_run_says_it_keeps_the_layout_it_started_with(tmp_path):
