@@ -49,18 +49,23 @@ def _push_stage(env_runner, mapping: SeatMapping, env_settings: dict) -> None:
 
 
 def _learner_outcome(chunks) -> tuple[str, float] | None:
-    """("win"|"loss"|"tie", the learner's return) from an episode's chunks, or None.
+    """("win"|"loss"|"tie" of the learner's team, the learner's return) from an episode's
+    chunks, or None. The return is per learner agent, averaged where the learner is its own
+    teammate.
 
     An agent that died in an earlier chunk is absent from the later ones, so all are searched."""
-    learner_steps = [e for chunk in chunks for e in chunk.agent_episodes.values()
-                     if e.module_id == LEARNER]
+    returns: dict = {}
+    for chunk in chunks:
+        for agent in chunk.agent_episodes.values():
+            if agent.module_id == LEARNER:
+                returns[agent.agent_id] = returns.get(agent.agent_id, 0.0) + agent.get_return()
     finals = [e.get_infos(-1) for e in chunks[-1].agent_episodes.values()]
     winners = next((info["winners"] for info in finals if "winners" in info), None)
-    if not learner_steps or winners is None:
+    if not returns or winners is None:
         return None
-    seat = learner_steps[0].agent_id
+    seat = next(iter(returns))
     result = "tie" if not winners else "win" if seat in winners else "loss"
-    return result, sum(e.get_return() for e in learner_steps)
+    return result, sum(returns.values()) / len(returns)
 
 
 class CurriculumCallback(RLlibCallback):
@@ -132,9 +137,10 @@ class CurriculumCallback(RLlibCallback):
         for name in ("win", "loss", "tie"):
             metrics_logger.log_value(f"learner_{name}", float(result == name), window=100)
         metrics_logger.log_value("learner_return", learner_return, window=100)
-        filters = episode.custom_data.get(FILTERS_KEY)
-        if filters is not None and filters.steps:
+        filters = list(episode.custom_data.get(FILTERS_KEY, {}).values())
+        steps = sum(f.steps for f in filters)
+        if steps:
             metrics_logger.log_value("learner_override_share",
-                                     filters.overridden / filters.steps, window=100)
-            for name, on in filters.flags.items():
+                                     sum(f.overridden for f in filters) / steps, window=100)
+            for name, on in filters[0].flags.items():  # one draw per episode
                 metrics_logger.log_value(f"learner_{name}_on", float(on), window=100)

@@ -7,7 +7,8 @@ piece overwrites the ACTIONS column and recomputes ACTION_LOGP from the module's
 trains on what was executed with a consistent probability ratio (rllib-notes §E).
 
 Which filters are on is decided per episode by the env's seeded stream (the `filters` info) and
-read once into `episode.custom_data`, together with the wrappers that apply them: the agents'
+read once per learner agent (two where the learner is its own teammate) into
+`episode.custom_data`, together with the wrappers that apply them: the agents'
 own `JitterCorrection` and `ActionFilter` (stacked jitter inside, filter outside, as in the
 registry) around a stand-in that returns the module's action. Their memory (positions, the
 expert SimpleAgent's memory, random streams) therefore lives with the episode, seeded from the
@@ -85,10 +86,11 @@ class LearnerFilters(ConnectorV2):
             episode = by_id[episode_id]
             agent_episode = episode.agent_episodes[agent_id]
             raw = agent_episode.get_observations(-1)["raw"]
-            filters = episode.custom_data.get(FILTERS_KEY)
+            by_agent = episode.custom_data.setdefault(FILTERS_KEY, {})
+            filters = by_agent.get(agent_id)
             if filters is None:
                 flags = agent_episode.get_infos(-1).get("filters", {})
-                filters = episode.custom_data[FILTERS_KEY] = EpisodeFilters(flags, agent_id, raw)
+                filters = by_agent[agent_id] = EpisodeFilters(flags, agent_id, raw)
             chosen = int(actions[0])
             executed = filters.act(chosen, raw)
             if executed == chosen:

@@ -18,7 +18,9 @@ the stages in order::
 
 A stage lasts `episodes` lifetime episodes (counted over all env runners). Policies are names from
 `policies/` whose kind has a fixed RLlib module (`agents/registry.KINDS`: scripted kinds, or frozen
-learned / RLlib-checkpoint policies). Every error names the file, the key and the valid choices,
+learned / RLlib-checkpoint policies); a teammate may also be `"learner"`, the trained policy
+itself, so both seats of its team learn as one policy (the paper's recipe keeps a SuicideTeammate
+beside a lone learner). Every error names the file, the key and the valid choices,
 so a typo fails before Ray starts: this module imports neither Ray nor torch
 (tests/test_layering.py checks a whole load in a fresh interpreter).
 """
@@ -34,7 +36,7 @@ from typing import Any
 from ..agents.registry import KINDS, policies_dir, policy_names, resolve_policy
 from ..game.constants import TEAM_PRESET
 from ..util.shipped import data_dir
-from .names import REWARD_MODES
+from .names import LEARNER, REWARD_MODES
 from .settings import PPOSettings
 
 if sys.version_info >= (3, 11):
@@ -94,11 +96,12 @@ class Curriculum:
         return sum(stage.episodes for stage in self.stages[:index + 1])
 
     def policies(self) -> list[str]:
-        """Every policy some stage plays, in first-use order (one fixed module each)."""
+        """Every fixed policy some stage plays, in first-use order (one fixed module each; a
+        "learner" teammate is the trained module)."""
         names: list[str] = []
         for stage in self.stages:
             for name in (stage.teammate, stage.opponent):
-                if name not in names:
+                if name not in names and name != LEARNER:
                     names.append(name)
         return names
 
@@ -180,7 +183,9 @@ def _stage(where: str, table: dict) -> Stage:
         if not isinstance(value, (int, float)) or not 0 <= value <= 1:
             raise ValueError(f"{where}: {key} must be a probability in [0, 1], got {value!r}")
     _check_policy(f"{where} key 'opponent'", stage.opponent)
-    _check_policy(f"{where} key 'teammate'", stage.teammate)
+    if stage.teammate != LEARNER:
+        _check_policy(f"{where} key 'teammate' (a policy, or {LEARNER!r}: the trained one)",
+                      stage.teammate)
     return stage
 
 

@@ -3,7 +3,8 @@
 The learner's seat cycles 0, 1, 2, 3 over the episodes an env runner starts, so it plays both
 teams ({0, 2} and {1, 3}, which differ: the reference shows a seat effect) and both corners of
 each; its teammate sits across (seat + 2) and the two other seats get the stage's opponent.
-Module ids are the policy names themselves, plus "learner". No Ray here: a mapping is a plain
+Module ids are the policy names themselves, plus "learner"; a teammate named "learner" makes
+both seats of the team the trained module. No Ray here: a mapping is a plain
 callable, pickled by its import path into the algorithm config (and so into checkpoints).
 
 The curriculum callback installs a new `SeatMapping` on the env runners only when the stage
