@@ -127,11 +127,24 @@ def _git(folder: Path, *args: str) -> str:
     return done.stdout.strip() if done.returncode == 0 else ""
 
 
-def _source(policy: str, checkpoint: Path, iteration: int, curriculum: Curriculum) -> dict:
+def _trial_of(checkpoint: Path) -> Path:
+    """The trial folder whose rows and params a checkpoint belongs with: its parent, or for a
+    stage's checkpoint (`<run>/stages/<n>-<name>`) the run's one trial."""
+    if (checkpoint.parent / "params.json").is_file():
+        return checkpoint.parent
+    trials = [p for p in checkpoint.parents[1].iterdir() if (p / "params.json").is_file()]
+    if len(trials) != 1:
+        raise ValueError(f"{checkpoint}: not in a trial folder, and its run "
+                         f"{checkpoint.parents[1]} has {len(trials)} trials, not one")
+    return trials[0]
+
+
+def _source(policy: str, checkpoint: Path, trial: Path, iteration: int,
+            curriculum: Curriculum) -> dict:
     """What `viz/model_card.py` says of where a policy came from."""
     run = checkpoint.parents[1]
     return {
-        "policy": policy, "run": run.name, "trial": checkpoint.parent.name,
+        "policy": policy, "run": run.name, "trial": trial.name,
         "checkpoint": f"{checkpoint.parent.name}/{checkpoint.name}", "iteration": iteration,
         "curriculum": {"name": curriculum.name, "description": curriculum.description,
                        "stages": [dataclasses.asdict(stage) for stage in curriculum.stages]},
@@ -154,12 +167,12 @@ def export_policy(source: str | Path, target: str | Path) -> tuple[Path, Path, P
     checkpoint = latest_checkpoint(source).resolve()
     net = load_checkpoint_net(checkpoint)
     iteration = checkpoint_iteration(checkpoint)
-    trial = read_trial(checkpoint.parent)
+    trial = read_trial(_trial_of(checkpoint))
     rows = [row for row in trial.rows if float(row["training_iteration"]) <= iteration]
     if not rows or float(rows[-1]["training_iteration"]) != iteration:
         raise ValueError(f"{trial.path}: no result row for iteration {iteration}, where "
                          f"{checkpoint.name} was taken (a run still writing? export it stopped)")
-    curriculum = _run_curriculum(checkpoint.parent)
+    curriculum = _run_curriculum(trial.path)
     target = Path(target)
     weights, policy_file = target / WEIGHTS_FILE, target.with_suffix(".toml")
     for path in (weights, policy_file):
@@ -171,7 +184,7 @@ def export_policy(source: str | Path, target: str | Path) -> tuple[Path, Path, P
                               f"{checkpoint.name}; see {target.name}/{CARD_FILE}", greedy=False)
     write_summary(Trial(trial.path, rows), target / TRAINING_DIR / trial.name)
     (target / SOURCE_FILE).write_text(json.dumps(
-        _source(target.name, checkpoint, iteration, curriculum), indent=1) + "\n")
+        _source(target.name, checkpoint, trial.path, iteration, curriculum), indent=1) + "\n")
     return weights, policy_file, write_model_card(target)
 
 

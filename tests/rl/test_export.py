@@ -8,6 +8,7 @@ import csv
 import json
 import pickle
 import re
+import shutil
 from collections import OrderedDict
 from pathlib import Path
 
@@ -88,6 +89,18 @@ def test_export_writes_a_plain_state_dict_a_policy_the_arena_plays_and_a_card(tm
     capsys.readouterr()
     assert main(["--out", str(tmp_path / "run"), "--export", str(target)]) == 2
     assert f"{target / 'pi.pt'} exists" in capsys.readouterr().err
+
+
+def test_a_stage_checkpoint_exports_with_its_runs_rows(tmp_path):
+    trial = _fake_run(tmp_path / "run", PommerNet())
+    shutil.copytree(trial / "checkpoint_000002", tmp_path / "run" / "stages" / "2-static")
+    target = tmp_path / "ppo"
+    assert main(["--out", str(tmp_path / "run" / "stages" / "2-static"),
+                 "--export", str(target)]) == 0
+    source = json.loads((target / "source.json").read_text())
+    assert (source["checkpoint"], source["trial"], source["iteration"]) == (
+        "stages/2-static", trial.name, 3)
+    assert "18 of 24 games" in (target / "MODEL_CARD.md").read_text()
 
 
 def test_report_card_adds_the_results_and_keeps_notes(tmp_path, capsys):
