@@ -115,13 +115,14 @@ def write_model_card(policy_dir: Path, records: list[Path] = ()) -> Path:
     source = read_source(policy_dir)
     parts = _preface(policy_dir, source)
     parts += list(fig3_section(find_trials(policy_dir / TRAINING_DIR), policy_dir, summaries=False))
+    play = (f"`python benchmarks/paper_table.py --team {source['policy']} --games 1000 --out "
+            f"RECORDS` (the paper's rows that name a policy we have; seed 0, seats balanced), "
+            f"then `python -m rllib_pommer.report --card {policy_dir} RECORDS/*.jsonl`")
     if records:
         parts += list(tables_section(list(records), policy_dir))
+        parts.append(f"From {len(records)} arena record files; played by {play}.")
     else:
-        parts += ["## Results",
-                  f"Not played yet: `python benchmarks/paper_table.py --team {source['policy']} "
-                  f"--games 1000 --out RECORDS` (the paper's rows), then `python -m "
-                  f"rllib_pommer.report --card {policy_dir} RECORDS/*.jsonl`."]
+        parts += ["## Results", f"Not played yet: {play}."]
     notes = policy_dir / NOTES_FILE
     if notes.is_file():
         parts += ["## Notes", notes.read_text().strip()]
