@@ -7,7 +7,7 @@ run has moved on or is gone:
 - `source.json` (written by `rl/checkpoint_policy.export_policy`): the run, trial and checkpoint
   it came from, the checkpoint's iteration, the curriculum (name, description, every stage), the
   commit it was exported at and the commits that packed the run;
-- `training/<run>/progress.csv`: the run's summary rows up to that checkpoint (`viz/training.py`),
+- `history/<run>/progress.csv`: the run's summary rows up to that checkpoint (`viz/training.py`),
   which give Fig. 3 and the stage table;
 - optionally `NOTES.md`: words of a person, kept as they are under "Notes".
 
@@ -26,7 +26,7 @@ from .training import find_trials, read_trial
 
 CARD_FILE = "MODEL_CARD.md"
 SOURCE_FILE = "source.json"
-TRAINING_DIR = "training"
+TRAINING_DIR = "history"
 NOTES_FILE = "NOTES.md"
 SOURCE_KEYS = ("policy", "run", "checkpoint", "iteration", "curriculum", "exported_at_commit",
                "run_commits")

@@ -27,6 +27,7 @@ from rllib_pommer.rl.checkpoint_policy import (
     load_checkpoint_net,
 )
 from rllib_pommer.train import main
+from rllib_pommer.viz.model_card import TRAINING_DIR
 from rllib_pommer.viz.training import read_trial
 
 COLUMNS = ("training_iteration", "time_total_s", "env_runners/num_env_steps_sampled_lifetime",
@@ -149,7 +150,7 @@ def test_the_committed_campaign_exports_to_its_checkpoint(tmp_path, committed_ca
     card = (target / "MODEL_CARD.md").read_text()
     assert re.search(rf"{games:,} of 100,000 games", card)
     assert f"iteration {iteration:,}" in card
-    kept = read_trial(target / "training" / "paper").rows
+    kept = read_trial(target / TRAINING_DIR / "paper").rows
     assert int(float(kept[-1]["training_iteration"])) == iteration
     net = load_checkpoint_net(checkpoint)
     weights = torch.load(target / "pi.pt", weights_only=True)
