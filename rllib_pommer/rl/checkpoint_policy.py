@@ -48,7 +48,12 @@ def latest_checkpoint(path: str | Path) -> Path:
     if not found:
         raise ValueError(f"{path}: no RLlib checkpoint with a learner module (looked for "
                          f"{MODULE_STATE} in it and in its checkpoint_* folders)")
-    return max(found, key=lambda p: (p.stat().st_mtime, p.name))
+    return max(found, key=checkpoint_age)
+
+
+def trial_dirs(out: Path) -> list[Path]:
+    """The Tune trial folders of the run in `out`."""
+    return sorted(p for p in Path(out).resolve().glob("*") if (p / "params.json").is_file())
 
 
 class StateUnpickler(pickle.Unpickler):
@@ -112,6 +117,18 @@ def checkpoint_iteration(checkpoint: Path) -> int:
     return iteration
 
 
+def checkpoint_age(path: Path) -> tuple[int, float, str]:
+    """A checkpoint's (training iteration, mtime, name), to find the newest: not its number,
+    which Tune restarts below the highest one on a resume (a resumed run wrote
+    checkpoint_000036 after the checkpoint_000037 it resumed from). One that cannot be read (cut
+    short, or older than algorithm states) comes first."""
+    try:
+        iteration = checkpoint_iteration(path)
+    except (ValueError, OSError):
+        iteration = -1
+    return iteration, path.stat().st_mtime, path.name
+
+
 def _run_curriculum(trial: Path) -> Curriculum:
     """The curriculum a trial trained on: named in the callback its params.json records."""
     params = trial / "params.json"
@@ -132,7 +149,7 @@ def _trial_of(checkpoint: Path) -> Path:
     stage's checkpoint (`<run>/stages/<n>-<name>`) the run's one trial."""
     if (checkpoint.parent / "params.json").is_file():
         return checkpoint.parent
-    trials = [p for p in checkpoint.parents[1].iterdir() if (p / "params.json").is_file()]
+    trials = trial_dirs(checkpoint.parents[1])
     if len(trials) != 1:
         raise ValueError(f"{checkpoint}: not in a trial folder, and its run "
                          f"{checkpoint.parents[1]} has {len(trials)} trials, not one")

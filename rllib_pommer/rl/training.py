@@ -32,7 +32,7 @@ from ray import tune
 
 from ..viz.training import HISTORY_FILE, write_summary
 from . import ray_session
-from .checkpoint_policy import checkpoint_iteration
+from .checkpoint_policy import checkpoint_age, trial_dirs
 from .config import build_config, check_pi_weights
 from .curriculum import Curriculum, load_curriculum
 from .names import LEARNER_THREADS_ENV
@@ -199,11 +199,6 @@ def _unreadable(path: Path) -> str | None:
     return None
 
 
-def trial_dirs(out: Path) -> list[Path]:
-    """The Tune trial folders of the run in `out`."""
-    return sorted(p for p in Path(out).resolve().glob("*") if (p / "params.json").is_file())
-
-
 def resumes_from_checkpoint(out: Path, resume: bool) -> bool:
     """Whether a (re)start of the run in `out` loads a checkpoint, so that pi comes from it and
     not from the imitation weights: a resume of a run whose trials all have one (Tune restarts a
@@ -297,17 +292,6 @@ def train(curriculum: Curriculum, out: Path, settings: RunSettings):
     return result
 
 
-def _checkpoint_age(path: Path) -> tuple[int, float]:
-    """A checkpoint's (training iteration, mtime), to find the newest: not its number, which
-    Tune restarts below the highest one on a resume (a resumed run wrote checkpoint_000036 after
-    the checkpoint_000037 it resumed from). One that cannot be read (cut short) comes first."""
-    try:
-        iteration = checkpoint_iteration(path)
-    except (ValueError, OSError):
-        iteration = -1
-    return iteration, path.stat().st_mtime
-
-
 def pack_run(out: Path) -> dict:
     """Shrink the stopped run in `out` to what resuming and the report need (see above); safe to
     repeat. Returns what it kept: {trial name: newest checkpoint name}."""
@@ -316,7 +300,7 @@ def pack_run(out: Path) -> dict:
         raise ValueError(f"--pack: no run in {out}")
     kept = {}
     for trial in trial_dirs(out):
-        checkpoints = sorted(trial.glob("checkpoint_*"), key=_checkpoint_age)
+        checkpoints = sorted(trial.glob("checkpoint_*"), key=checkpoint_age)
         write_summary(trial, trial, HISTORY_FILE)
         results = trial / "result.json"
         if results.is_file():  # Tune reads the last result when it restores the trial

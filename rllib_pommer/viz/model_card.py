@@ -18,11 +18,10 @@ Table 3 layout and Fig. 4.
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 
 from .report import fig3_section, tables_section
-from .training import find_trials, read_trial
+from .training import find_trials, number, read_trial
 
 CARD_FILE = "MODEL_CARD.md"
 SOURCE_FILE = "source.json"
@@ -58,13 +57,6 @@ def _last_row(policy_dir: Path) -> dict:
     return rows[-1]
 
 
-def _number(row: dict, key: str) -> float:
-    try:
-        return float(row.get(key))
-    except (TypeError, ValueError):
-        return math.nan
-
-
 def _schedule(curriculum: dict) -> str:
     lines = ["| stage | games | opponents | teammate | reward | action filter | jitter "
              "correction | pi |", "|---" * 8 + "|"]
@@ -79,14 +71,14 @@ def _preface(policy_dir: Path, source: dict) -> list[str]:
     row = _last_row(policy_dir)
     curriculum = source["curriculum"]
     total = sum(s["episodes"] for s in curriculum["stages"])
-    games = int(_number(row, "env_runners/num_episodes_lifetime"))
-    hours = _number(row, "time_total_s") / 3600
+    games = int(number(row.get("env_runners/num_episodes_lifetime")))
+    hours = number(row.get("time_total_s")) / 3600
     finished = games >= total
     status = ("the whole curriculum" if finished else
               f"**{games / total:.0%} of the curriculum: training goes on**, and this card and "
               f"the weights are replaced as it does")
     commits = source["run_commits"]
-    steps = int(_number(row, "env_runners/num_env_steps_sampled_lifetime"))
+    steps = int(number(row.get("env_runners/num_env_steps_sampled_lifetime")))
     title = curriculum["description"].rstrip(".")
     return [
         f"# Model card: `{source['policy']}` ({title})",

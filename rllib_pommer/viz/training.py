@@ -186,15 +186,16 @@ def without_discarded(rows: list[dict]) -> list[dict]:
     kept: list[dict] = []
     last = -math.inf
     for row in rows:
-        iteration = _number(row.get("training_iteration"))
+        iteration = number(row.get("training_iteration"))
         if iteration <= last:
-            kept = [k for k in kept if not _number(k.get("training_iteration")) >= iteration]
+            kept = [k for k in kept if not number(k.get("training_iteration")) >= iteration]
         last = iteration if math.isfinite(iteration) else last
         kept.append(row)
     return kept
 
 
-def _number(value) -> float:
+def number(value) -> float:
+    """A cell as a float; NaN where it is empty or not a number."""
     try:
         return float(value)
     except (TypeError, ValueError):
@@ -216,7 +217,7 @@ def rolling_mean(means: np.ndarray, counts: np.ndarray, window: int = WINDOW) ->
 
 
 def _values(rows: list[dict], column: str | None) -> np.ndarray:
-    return np.array([_number(row.get(column)) for row in rows]) if column else \
+    return np.array([number(row.get(column)) for row in rows]) if column else \
         np.full(len(rows), np.nan)
 
 
