@@ -100,8 +100,12 @@ def _pack(parser: argparse.ArgumentParser, out: Path | None) -> int:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     size = sum(p.stat().st_size for p in out.rglob("*") if p.is_file())
-    for trial, checkpoint in kept.items():
+    for trial, (checkpoint, registered) in kept.items():
         print(f"{out / trial}: kept {checkpoint}, results folded into history.csv")
+        if checkpoint != registered:
+            print(f"  Tune's state named {registered} (the run stopped before registering the "
+                  f"newest checkpoint, or resumed under stale numbers); it now resumes from "
+                  f"{checkpoint}")
     print(f"{out}: {size / 2**20:.1f} MiB; continue anywhere with "
           f"`python -m rllib_pommer.train --curriculum NAME --out {out} --resume`")
     return 0

@@ -119,8 +119,9 @@ def checkpoint_iteration(checkpoint: Path) -> int:
 
 def checkpoint_age(path: Path) -> tuple[int, float, str]:
     """A checkpoint's (training iteration, mtime, name), to find the newest: not its number,
-    which Tune restarts below the highest one on a resume (a resumed run wrote
-    checkpoint_000036 after the checkpoint_000037 it resumed from). One that cannot be read (cut
+    which Tune restarted below the highest one when it resumed under a stale counter (a resumed
+    run wrote checkpoint_000036 after the checkpoint_000037 it resumed from; packing now resets
+    the counter, `tune_state.py`). One that cannot be read (cut
     short, or older than algorithm states) comes first."""
     try:
         iteration = checkpoint_iteration(path)

@@ -31,8 +31,8 @@ import torch
 from ray import tune
 
 from ..viz.training import HISTORY_FILE, write_summary
-from . import ray_session
-from .checkpoint_policy import checkpoint_age, trial_dirs
+from . import ray_session, tune_state
+from .checkpoint_policy import checkpoint_age, checkpoint_iteration, trial_dirs
 from .config import build_config, check_pi_weights
 from .curriculum import Curriculum, load_curriculum
 from .names import LEARNER_THREADS_ENV
@@ -294,26 +294,44 @@ def train(curriculum: Curriculum, out: Path, settings: RunSettings):
 
 def pack_run(out: Path) -> dict:
     """Shrink the stopped run in `out` to what resuming and the report need (see above); safe to
-    repeat. Returns what it kept: {trial name: newest checkpoint name}."""
+    repeat. The newest checkpoint (by iteration) is kept and made the one Tune resumes from
+    (`tune_state.register_only`). Returns what it kept: {trial name: (newest checkpoint name,
+    the name Tune's state had registered)}."""
     out = Path(out).resolve()  # Tune takes a relative path for a URI without a scheme
     if not tune.Tuner.can_restore(str(out)):
         raise ValueError(f"--pack: no run in {out}")
-    kept = {}
+    registered = tune_state.registered_checkpoints(out)
+    kept, to_register = {}, {}
     for trial in trial_dirs(out):
         checkpoints = sorted(trial.glob("checkpoint_*"), key=checkpoint_age)
         write_summary(trial, trial, HISTORY_FILE)
         results = trial / "result.json"
-        if results.is_file():  # Tune reads the last result when it restores the trial
-            last = [line for line in results.read_text().splitlines() if line.strip()][-1:]
-            results.write_text("".join(f"{line}\n" for line in last))
+        rows = ([line for line in results.read_text().splitlines() if line.strip()]
+                if results.is_file() else [])
+        if rows:  # Tune reads the last result when it restores the trial
+            results.write_text(f"{rows[-1]}\n")
         for stale in [*checkpoints[:-1], *trial.glob("events.out.tfevents.*"),
                       trial / "progress.csv"]:
             if stale.is_dir():
                 shutil.rmtree(stale)
             elif stale.exists():
                 stale.unlink()
-        kept[trial.name] = checkpoints[-1].name if checkpoints else None
+        newest = checkpoints[-1] if checkpoints else None
+        kept[trial.name] = (newest and newest.name, registered.get(trial.name))
+        if newest:
+            to_register[trial.name] = (newest, _result_at(rows, checkpoint_iteration(newest)))
+    tune_state.register_only(out, to_register)
     for pattern in STATE_PATTERNS:
         for stale in sorted(out.glob(pattern))[:-1]:  # one per start; Tune reads the newest
             stale.unlink()
     return kept
+
+
+def _result_at(rows: list[str], iteration: int) -> dict:
+    """The result of `iteration` among result.json's lines (the newest such line), as Tune
+    records beside a checkpoint; {} if none survived."""
+    for line in reversed(rows):
+        result = json.loads(line)
+        if result.get("training_iteration") == iteration:
+            return result
+    return {}

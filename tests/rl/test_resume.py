@@ -19,7 +19,7 @@ import torch
 
 from rllib_pommer.imitation.learned import load_policy_net
 from rllib_pommer.rl import ray_session
-from rllib_pommer.rl.checkpoint_policy import load_checkpoint_net
+from rllib_pommer.rl.checkpoint_policy import checkpoint_iteration, load_checkpoint_net
 from rllib_pommer.viz.training import read_rows
 
 REPO = Path(__file__).resolve().parents[2]
@@ -97,6 +97,10 @@ def test_resume_after_sigkill(tmp_path, pi_weights):
     assert all(torch.equal(warmup_end[key], start[key]) for key in start)
 
 
+def _iteration(row) -> int:
+    return int(float(row["training_iteration"]))
+
+
 def _wait_for(predicate, process, seconds: float, what: str) -> None:
     deadline = time.monotonic() + seconds
     while not predicate():
@@ -117,8 +121,11 @@ def _interrupt(process) -> int:
 def test_a_packed_run_resumes_at_another_path(tmp_path, pi_weights):
     """Stop a run, pack it, move it to another folder (as a fresh clone would hold it) and resume
     it from another working directory, on a machine without the imitation weights it started
-    from: it goes on from its checkpoint, same lifetime episode count and stage, its history
-    reads as one run, and the arena plays it."""
+    from: it goes on from its newest checkpoint, same lifetime episode count and stage, its
+    history reads as one run, and the arena plays it. The run is left as stops have left the
+    campaign's: Tune's state older than the newest checkpoint (a stop that beat Tune to
+    registering it) and the newest checkpoint numbered below an older one (a resume under stale
+    numbers); the pack makes Tune resume from the newest, numbering on after it."""
     started_from = tmp_path / "first" / "weights" / "pi.pt"  # removed with the old place
     started_from.parent.mkdir(parents=True)
     shutil.copy(pi_weights, started_from)
@@ -137,14 +144,24 @@ def test_a_packed_run_resumes_at_another_path(tmp_path, pi_weights):
     process = subprocess.Popen(_train(first, pi_weights, "--curriculum", str(curriculum)),
                                cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                                start_new_session=True)
-    _wait_for(lambda: list(first.glob("*/checkpoint_000002")), process, 240, "3 iterations")
+    _wait_for(lambda: list(first.glob("*/checkpoint_000001")), process, 240, "2 iterations")
+    (early_state,) = first.glob("experiment_state-*.json")
+    early = early_state.read_bytes()
+    _wait_for(lambda: list(first.glob("*/checkpoint_000003")), process, 240, "4 iterations")
     assert _interrupt(process) == 130
+    early_state.write_bytes(early)
+    (trial,) = [p for p in first.iterdir() if p.is_dir() and p.name.startswith("PPO_")]
+    *_, lower, higher = sorted(trial.glob("checkpoint_*"))
+    newest_iteration = checkpoint_iteration(higher)
+    higher.rename(trial / "swap")
+    lower.rename(higher)
+    (trial / "swap").rename(lower)  # the newest now has the lower number
     packed = subprocess.run([sys.executable, "-m", "rllib_pommer.train", "--out", str(first),
                              "--pack"], cwd=REPO, capture_output=True, text=True, timeout=120)
     assert packed.returncode == 0, packed.stderr[-2000:]
-    (trial,) = [p for p in first.iterdir() if p.is_dir() and p.name.startswith("PPO_")]
-    assert len(list(trial.glob("checkpoint_*"))) == 1 and (trial / "history.csv").is_file()
-    assert not list(trial.glob("events.out.tfevents.*"))
+    assert f"it now resumes from {lower.name}" in packed.stdout
+    assert [p.name for p in trial.glob("checkpoint_*")] == [lower.name]
+    assert (trial / "history.csv").is_file() and not list(trial.glob("events.out.tfevents.*"))
     before = read_rows(trial)
     (state,) = first.glob("basic-variant-state-*.json")  # pack keeps the newest only
     intact = state.read_bytes()
@@ -166,8 +183,13 @@ def test_a_packed_run_resumes_at_another_path(tmp_path, pi_weights):
               "2 iterations after the resume")
     _interrupt(process)
     rows = read_rows(moved_trial)
-    iterations = [int(float(r["training_iteration"])) for r in rows]
+    iterations = [_iteration(r) for r in rows]
     assert iterations == list(range(1, len(rows) + 1))  # one run, no gap, no restart
+    assert _iteration(rows[len(before)]) == newest_iteration + 1  # from the newest
+    assert checkpoint_iteration(moved_trial / lower.name) == newest_iteration  # not overwritten
+    after = sorted(moved_trial.glob("checkpoint_*"))
+    assert after[0].name == lower.name and len(after) > 1  # new ones numbered after the kept
+    assert [checkpoint_iteration(c) for c in after] == sorted(map(checkpoint_iteration, after))
     last, resumed = before[-1], rows[len(before)]
     lifetime = int(float(last["env_runners/num_episodes_lifetime"]))
     assert (resumed["env_runners/num_episodes_lifetime"] - resumed["env_runners/num_episodes"]
@@ -178,24 +200,3 @@ def test_a_packed_run_resumes_at_another_path(tmp_path, pi_weights):
                              "--vs", "static", "--games", "2", "--workers", "1"], cwd=tmp_path,
                             capture_output=True, text=True, timeout=300, env=elsewhere)
     assert played.returncode == 0 and "2 games" in played.stdout, played.stderr[-2000:]
-
-
-def test_pack_keeps_the_newest_checkpoint_by_iteration_not_by_number(tmp_path):
-    """A resumed run numbers its checkpoints from below the one it resumed from (seen in the
-    campaign: checkpoint_000036 written after checkpoint_000037); packing keeps the later one."""
-    import pickle
-
-    from rllib_pommer.rl.checkpoint_policy import ALGORITHM_STATE
-    from rllib_pommer.rl.training import pack_run
-
-    trial = tmp_path / "run" / "PPO_trial"
-    for name, iteration in (("checkpoint_000035", 1100), ("checkpoint_000037", 1125),
-                            ("checkpoint_000036", 1150)):
-        (trial / name).mkdir(parents=True)
-        with (trial / name / ALGORITHM_STATE).open("wb") as f:
-            pickle.dump({"training_iteration": iteration}, f)
-    (trial / "params.json").write_text("{}")
-    (trial / "progress.csv").write_text("training_iteration,time_total_s\n1150,1.0\n")
-    (tmp_path / "run" / "tuner.pkl").write_bytes(b"")  # what Tune looks for
-    assert pack_run(tmp_path / "run") == {"PPO_trial": "checkpoint_000036"}
-    assert sorted(p.name for p in trial.glob("checkpoint_*")) == ["checkpoint_000036"]

@@ -1,0 +1,85 @@
+"""Tune's saved experiment state, made to name the one checkpoint a packed run keeps.
+
+Tune resumes a trial from the checkpoint its experiment state registered last, and names the
+trial's next checkpoints from a counter kept in the same state. Neither need agree with the
+folder. A run stopped between the trial writing a checkpoint and the driver registering it
+leaves a newer checkpoint the state does not name (the cautious campaign, stopped on
+2026-12-02: the state named checkpoint_000036, iteration 1025, beside checkpoint_000037,
+iteration 1050; packing kept the newer and the resume failed on the missing older one). And the
+counter lags the names on disk (that state's counter said 35), so a resumed trial writes names
+it already holds, and evicting the checkpoint it resumed from deletes whatever now sits under
+that name.
+
+`register_only` rewrites the newest state file so that each packed trial has exactly the kept
+checkpoint registered, with the results of its iteration, and a counter that continues after
+its number. It goes through Tune's own serialisation of trials (`Trial.from_json_state` /
+`get_json_state`), so only two attributes of Tune's private checkpoint bookkeeping are named
+here; ray is pinned to 2.60 in pyproject.toml and tests/rl/test_resume.py resumes a packed run
+whose state named an older checkpoint.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+from ray.train import Checkpoint
+from ray.train._internal.session import _TrainingResult
+from ray.tune.experiment.trial import Trial
+
+EXPERIMENT_STATE = "experiment_state-*.json"
+CHECKPOINT_NUMBER = re.compile(r"checkpoint_(\d+)$")
+
+
+def registered_checkpoints(out: Path) -> dict[str, str | None]:
+    """{trial folder name: the checkpoint name Tune would resume it from} in the newest state."""
+    _, state = _newest_state(out)
+    names = {}
+    for trial_json, metadata_json in state["trial_data"]:
+        trial = _trial(trial_json, metadata_json)
+        latest = trial.run_metadata.checkpoint_manager.latest_checkpoint_result
+        names[trial.storage.trial_dir_name] = Path(latest.checkpoint.path).name if latest else None
+    return names
+
+
+def register_only(out: Path, kept: dict[str, tuple[Path, dict]]) -> None:
+    """Make `kept` ({trial folder name: (checkpoint folder, its iteration's results)}) the only
+    registered checkpoint of each of those trials in the newest experiment state of `out`."""
+    path, state = _newest_state(out)
+    for entry, (trial_json, metadata_json) in enumerate(state["trial_data"]):
+        trial = _trial(trial_json, metadata_json)
+        name = trial.storage.trial_dir_name
+        if name not in kept:
+            continue
+        checkpoint, metrics = kept[name]
+        number = CHECKPOINT_NUMBER.search(checkpoint.name)
+        if not number:
+            raise ValueError(f"{checkpoint}: not a Tune checkpoint folder (checkpoint_NNNNNN)")
+        # Under the trial path the state holds, which Tune rewrites when the run has moved.
+        where = f"{trial.storage.trial_fs_path}/{checkpoint.name}"
+        result = _TrainingResult(
+            checkpoint=Checkpoint(where, filesystem=trial.storage.storage_filesystem),
+            metrics=metrics)
+        manager = trial.run_metadata.checkpoint_manager
+        manager._checkpoint_results = [result]
+        manager._latest_checkpoint_result = result
+        trial.storage.current_checkpoint_index = int(number.group(1))
+        trial.stub = json.loads(trial_json)["stub"]  # read as a stub: no trainable needed here
+        trial.invalidate_json_state()
+        trial.run_metadata.invalidate_cache()
+        state["trial_data"][entry] = list(trial.get_json_state())
+    path.write_text(json.dumps(state))
+
+
+def _newest_state(out: Path) -> tuple[Path, dict]:
+    newest = max(Path(out).glob(EXPERIMENT_STATE), default=None)
+    if newest is None:
+        raise ValueError(f"{out}: no Tune experiment state ({EXPERIMENT_STATE})")
+    return newest, json.loads(newest.read_text())
+
+
+def _trial(trial_json: str, metadata_json: str) -> Trial:
+    trial = Trial.from_json_state(trial_json, stub=True)
+    trial.restore_run_metadata(metadata_json)
+    return trial
