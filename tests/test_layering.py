@@ -90,3 +90,14 @@ def test_curricula_are_checked_without_ray_or_torch(tmp_path):
              "SeatMapping(0, 'suicide', 'simple')")
     modules = ["rllib_pommer.rl.names", "rllib_pommer.rl.curriculum", "rllib_pommer.rl.mapping"]
     assert _loaded(modules, ("ray", "torch", "gymnasium"), check) == ""
+
+
+def test_nothing_below_rl_imports_rl():
+    """Data flows one way: the game, agents, data, imitation, arena and the user envs never
+    reach up into rl/, not even its Ray-free modules (the reward modes are the game's)."""
+    packages = ("game", "agents", "data", "imitation", "arena", "envs")
+    modules = [m for p in packages for m in _package_modules(p)] + ["rllib_pommer.envs"]
+    code = (f"import sys, {', '.join(modules)}\n"
+            "print(','.join(sorted(m for m in sys.modules if m.startswith('rllib_pommer.rl'))))")
+    assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          check=True).stdout.strip() == ""

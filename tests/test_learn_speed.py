@@ -6,6 +6,7 @@ import torch
 
 from rllib_pommer.imitation import speed
 from rllib_pommer.imitation.network import PommerNet
+from rllib_pommer.rl.settings import PPOSettings
 
 
 def _forward_macs(num_outputs: int) -> int:
@@ -30,7 +31,7 @@ def test_flops_are_two_per_multiply_add_and_backward_costs_about_twice_forward()
 
 
 def test_every_measure_runs_and_reports_a_rate():
-    assert speed.plain_ppo_samples_per_s(seconds=0.1) > 0
+    assert speed.plain_ppo_samples_per_s(PPOSettings(), seconds=0.1) > 0
     speeds = speed.bc_speeds(seconds=0.1)
     assert speeds["bc_samples_per_s"] > 0 and speeds["bc_baseline_samples_per_s"] > 0
     bound = speed.flop_bound(seconds=0.1)

@@ -7,12 +7,8 @@ same observations and rewards, and only the RLlib one pays for importing Ray.
 
 An agent that dies gets its last observation and its final reward, then leaves; the game ends for
 everyone when the engine says so (a team wiped out, or the step limit, a tie). Rewards are zero
-until an agent's last step, where `reward_mode` decides them:
-
-* "shaped" (the paper): +1 if the agent's team won, else +0.5 if exactly one enemy is dead, else -1,
-  judged at the agent's last step;
-* "raw": the engine's reward (+1 win, -1 loss or tie) for agents present at the end, -1 for an
-  agent that died before (it cannot see the outcome any more).
+until an agent's last step, where `reward_mode` ("shaped", the paper's, or "raw", the engine's;
+`game/rewards.py`) decides them.
 
 The final infos carry `winners` (seats, empty on a tie), so callbacks can log the true outcome
 whatever the reward mode. Each reset also draws, from the env's seeded stream, whether the learner's
@@ -35,12 +31,12 @@ from dataclasses import replace
 import gymnasium as gym
 import numpy as np
 
-from ..game.constants import NUM_ACTIONS, NUM_AGENTS, TEAM_PRESET, Result
+from ..game.constants import NUM_ACTIONS, NUM_AGENTS, TEAM_PRESET
 from ..game.engine import Game
 from ..game.observation import Observation
 from ..game.raw_codec import RAW_SIZE, pack_raw
+from ..game.rewards import check_reward_mode, final_reward
 from ..imitation.features import NUM_PLANES, featurize
-from ..rl.names import REWARD_MODES
 from ..viz.frames import state_frame
 from ..viz.render import draw_frame
 
@@ -110,9 +106,7 @@ class MultiAgentTeam:
         self.last_observation: Observation | None = None
 
     def set_stage(self, reward: str, action_filter: float, jitter: float) -> None:
-        if reward not in REWARD_MODES:
-            raise ValueError(f"reward mode {reward!r} is not one of {REWARD_MODES}")
-        self.reward_mode = reward
+        self.reward_mode = check_reward_mode(reward)
         self.filter_probabilities = {"action_filter": float(action_filter),
                                      "jitter": float(jitter)}
 
@@ -141,22 +135,14 @@ class MultiAgentTeam:
             infos[agent] = {"filters": self._filters}
             leaves = done or not alive[agent]
             terminateds[agent] = leaves
-            rewards[agent] = self._final_reward(agent, done, info, engine_rewards, alive) \
-                if leaves else 0.0
+            rewards[agent] = final_reward(self.reward_mode, agent, done, info,
+                                          engine_rewards[agent], alive) if leaves else 0.0
             if done:
                 infos[agent]["winners"] = info.get("winners", [])
             if not leaves:
                 self.agents.append(agent)
         terminateds["__all__"] = done
         return observations, rewards, terminateds, {"__all__": False}, infos
-
-    def _final_reward(self, agent, done, info, engine_rewards, alive) -> float:
-        if self.reward_mode == "raw":
-            return float(engine_rewards[agent]) if done else -1.0
-        if done and info["result"] == Result.WIN and agent in info["winners"]:
-            return 1.0
-        enemies_dead = sum(not alive[e] for e in range(NUM_AGENTS) if e % 2 != agent % 2)
-        return 0.5 if enemies_dead == 1 else -1.0
 
     def draw(self) -> np.ndarray:
         """The whole board now, uint8 RGB (H, W, 3), drawn by the replay renderer."""

@@ -4,8 +4,9 @@ The measures behind `python -m rllib_pommer.bench learn` that need torch but not
 
 * `plain_ppo_samples_per_s`: PPO's update as plain eager float32 NCHW torch, the network as it
   stood before any speed work: pi and a separate vf (`PommerNet`), a clipped surrogate plus value
-  loss, Adam, gradient clip, with the real learner's minibatch, clip, lr and gradient clip
-  (`rl/settings.PPOSettings`, free of Ray). The baseline the RLlib learner is compared to.
+  loss, Adam, gradient clip, with the minibatch, clip, lr and gradient clip it is given (the
+  caller, `rl/speed.py`, gives the real learner's `PPOSettings`). The baseline the RLlib learner
+  is compared to.
 * `bc_samples_per_s`: the real behaviour-cloning step (`bc.train_step` with `BCConfig`'s speed
   settings), beside `plain_bc_samples_per_s`, the same step with those settings off.
 * `flop_bound`: FLOPs per trained sample counted by torch's `FlopCounterMode` (forward and
@@ -22,6 +23,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import Protocol
 
 import numpy as np
 import torch
@@ -31,13 +33,21 @@ from torch.utils.flop_counter import FlopCounterMode
 from ..data.schema import Batch
 from ..game.constants import NUM_ACTIONS
 from ..game.observation import empty_observations
-from ..rl.settings import PPOSettings
 from .bc import BCConfig, build_net, train_step
 from .features import NUM_PLANES
 from .network import PommerNet
 
-PPO = PPOSettings()
 BC_BATCH = 512
+COUNTED_ROWS = 16  # a batch to count FLOPs on: per sample, they do not depend on its size
+
+
+class PPOUpdate(Protocol):
+    """The PPO settings the baseline update uses (`rl/settings.PPOSettings` has them)."""
+
+    minibatch_size: int
+    clip_param: float
+    lr: float
+    grad_clip: float
 
 
 def sparse_planes(rows: int, seed: int = 0) -> torch.Tensor:
@@ -57,32 +67,33 @@ def _rate(step: Callable[[], int], seconds: float, warmup: int = 3) -> float:
 
 
 def _ppo_minibatch_step(pi: PommerNet, vf: PommerNet, optimizer: torch.optim.Optimizer,
-                        planes: torch.Tensor) -> int:
+                        planes: torch.Tensor, ppo: PPOUpdate) -> int:
     """PPO's loss on one minibatch: clipped surrogate plus squared value error."""
     rows = len(planes)
     actions = torch.randint(0, NUM_ACTIONS, (rows,))
     old_logp, advantages, targets = torch.zeros(rows) - 1.8, torch.randn(rows), torch.randn(rows)
     logp = torch.log_softmax(pi(planes), -1).gather(1, actions[:, None]).squeeze(1)
     ratio = torch.exp(logp - old_logp)
-    clipped = ratio.clamp(1 - PPO.clip_param, 1 + PPO.clip_param)
+    clipped = ratio.clamp(1 - ppo.clip_param, 1 + ppo.clip_param)
     surrogate = torch.min(ratio * advantages, clipped * advantages)
     loss = -surrogate.mean() + F.mse_loss(vf(planes).squeeze(-1), targets)
     optimizer.zero_grad()
     loss.backward()
-    torch.nn.utils.clip_grad_norm_([*pi.parameters(), *vf.parameters()], PPO.grad_clip)
+    torch.nn.utils.clip_grad_norm_([*pi.parameters(), *vf.parameters()], ppo.grad_clip)
     optimizer.step()
     return rows
 
 
-def plain_ppo_samples_per_s(seconds: float = 5.0) -> float:
+def plain_ppo_samples_per_s(ppo: PPOUpdate, seconds: float = 5.0) -> float:
     pi, vf = PommerNet(), PommerNet(num_outputs=1)
-    optimizer = torch.optim.Adam([*pi.parameters(), *vf.parameters()], lr=PPO.lr)
-    pool = sparse_planes(16 * PPO.minibatch_size)
+    optimizer = torch.optim.Adam([*pi.parameters(), *vf.parameters()], lr=ppo.lr)
+    rows = ppo.minibatch_size
+    pool = sparse_planes(16 * rows)
     offsets = iter(range(10**9))
 
     def step() -> int:
-        start = next(offsets) % 16 * PPO.minibatch_size
-        return _ppo_minibatch_step(pi, vf, optimizer, pool[start:start + PPO.minibatch_size])
+        start = next(offsets) % 16 * rows
+        return _ppo_minibatch_step(pi, vf, optimizer, pool[start:start + rows], ppo)
 
     return _rate(step, seconds)
 
@@ -123,12 +134,12 @@ def flops_per_sample(num_outputs: int = NUM_ACTIONS, backward: bool = True) -> i
     """FLOPs of one sample through `PommerNet` (forward, plus backward if asked), as torch's
     `FlopCounterMode` counts them."""
     net = PommerNet(num_outputs=num_outputs)
-    planes = sparse_planes(PPO.minibatch_size)
+    planes = sparse_planes(COUNTED_ROWS)
     with FlopCounterMode(display=False) as counter:
         out = net(planes).sum()
         if backward:
             out.backward()
-    return counter.get_total_flops() // PPO.minibatch_size
+    return counter.get_total_flops() // COUNTED_ROWS
 
 
 def float32_peak_flops(seconds: float = 2.0, size: int = 1024) -> float:

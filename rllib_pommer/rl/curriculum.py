@@ -35,8 +35,9 @@ from typing import Any
 
 from ..agents.registry import KINDS, policies_dir, policy_names, resolve_policy
 from ..game.constants import TEAM_PRESET
+from ..game.rewards import REWARD_MODES
 from ..util.shipped import data_dir
-from .names import LEARNER, REWARD_MODES
+from .names import LEARNER
 from .settings import PPOSettings
 
 if sys.version_info >= (3, 11):

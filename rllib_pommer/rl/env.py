@@ -16,7 +16,8 @@ from ray.tune.registry import register_env
 
 from ..envs.team import ACTION_SPACE, OBSERVATION_SPACE, MultiAgentTeam, agent_observations
 from ..game.raw_codec import RAW_SIZE, pack_raw, unpack_raw
-from .names import ENV_NAME, REWARD_MODES
+from ..game.rewards import REWARD_MODES
+from .names import ENV_NAME
 
 __all__ = ["ACTION_SPACE", "ENV_NAME", "OBSERVATION_SPACE", "RAW_SIZE", "REWARD_MODES",
            "PommeEnv", "agent_observations", "pack_raw", "unpack_raw"]

@@ -2,8 +2,8 @@
 
 Plain dataclasses that import neither Ray nor torch, so that `python -m rllib_pommer.train` builds
 its options from them before anything heavy loads (`util/cli_options.py`), a curriculum file is
-checked against them without Ray, and the plain-torch baseline of `bench learn`
-(`imitation/speed.py`) measures the same minibatch and clip as the real learner.
+checked against them without Ray, and `bench learn` hands the plain-torch baseline
+(`imitation/speed.py`) the same minibatch and clip as the real learner's.
 
 `PPOSettings` are the values `rl/config.build_config` hands RLlib; a curriculum's `[ppo]` table may
 override the fields marked as options (our choices, argued in rl/config.py), never the paper's

@@ -186,7 +186,8 @@ def learner_speeds(updates: int = 3, curriculum: str = "quick") -> dict:
     torch.set_num_threads(threads)
     torch.set_flush_denormal(True)
     result = {"torch_threads": threads, **_rllib_learner_speeds(updates, curriculum)}
-    result["ppo_baseline_samples_per_s"] = imitation_speed.plain_ppo_samples_per_s()
+    result["ppo_baseline_samples_per_s"] = imitation_speed.plain_ppo_samples_per_s(
+        load_curriculum(curriculum).ppo)
     result.update(imitation_speed.bc_speeds())
     result.update(imitation_speed.flop_bound())
     result["ppo_speedup"] = result["ppo_samples_per_s"] / result["ppo_baseline_samples_per_s"]
