@@ -10,7 +10,7 @@ the board and the three agents' random streams from the env's seeded generator, 
 followed by the same actions replays the same episode.
 
 The episode ends when the trained agent leaves the game (it dies, or the game ends); its reward is
-zero until then and the `reward` mode's at that step (`team.MultiAgentTeam`: "shaped" as in the
+zero until then and the `reward` mode's at that step (`game/rewards.py`: "shaped" as in the
 paper, or "raw"). Observations are the 19 planes as a Box by default (`observation` picks another
 form, `team.OBSERVATIONS`).
 """

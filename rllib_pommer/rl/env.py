@@ -2,11 +2,12 @@
 0..3), every one exposed.
 
 The game, its observations and rewards are `envs.team.MultiAgentTeam` (no Ray, shared with the
-PettingZoo and Gymnasium envs; its docstring says what agents observe and earn); this module adds
-RLlib's base class and the registration. The training uses the default "dict" observation, so any
-policy can sit in any seat; `env_config={"observation": "planes_last"}` gives the planes alone as
-a Box, for RLlib's default model. The raw codec (`game/raw_codec.py`) and the run's names
-(`names.py`) stay importable from here, where older code and notebooks import them.
+PettingZoo and Gymnasium envs; its docstring says what agents observe, `game/rewards.py` what
+they earn); this module adds RLlib's base class and the registration. The training uses the
+default "dict" observation, so any policy can sit in any seat;
+`env_config={"observation": "planes_last"}` gives the planes alone as a Box, for RLlib's default
+model. The raw codec (`game/raw_codec.py`) and the run's names (`names.py`) stay importable from
+here, where older code and notebooks import them.
 """
 
 from __future__ import annotations
