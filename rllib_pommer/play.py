@@ -21,7 +21,7 @@ import sys
 import time
 from pathlib import Path
 
-from .playing.server import make_app, parse_turn_time, serve_game
+from .playing.server import RECONNECT, make_app, parse_turn_time, serve_game
 from .playing.session import HumanGame, PlaySpec
 from .util.outputs import check_output
 
@@ -52,6 +52,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--port", type=int, default=8080, help="0: any free port")
     parser.add_argument("--turn-time", type=_turn_time, default=DEFAULT_TURN_TIME,
                         metavar="SECONDS|wait", help="time for each move (default %(default)s)")
+    parser.add_argument("--reconnect", type=float, default=RECONNECT, metavar="SECONDS",
+                        help="how long a closed page (a reload) has to come back before the "
+                        "game is forfeited; the clock waits meanwhile (default %(default)s)")
     parser.add_argument("--out", type=Path, help="the replay, .jsonl or .jsonl.gz "
                         "(default: play-<date>-<time>.jsonl.gz here)")
     args = parser.parse_args(argv)
@@ -59,6 +62,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if not 0 <= args.port < 65536:
             raise ValueError(f"--port must be in 0..65535, got {args.port}")
+        if not 0 <= args.reconnect <= 3600:
+            raise ValueError(f"--reconnect must be 0..3600 seconds, got {args.reconnect}")
         check_output(out, "--out")
         game = HumanGame(PlaySpec(args.team, args.vs, args.seat, args.teammate, args.seed))
     except ValueError as exc:
@@ -69,7 +74,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"play at http://{args.host}:{port}/", flush=True)
 
     try:
-        table = asyncio.run(serve_game(make_app(game, out, args.turn_time), args.host, args.port,
+        table = asyncio.run(serve_game(make_app(game, out, args.turn_time, args.reconnect),
+                                       args.host, args.port,
                                        announce))
     except OSError as exc:
         print(f"error: cannot serve on {args.host}:{args.port} ({exc})", file=sys.stderr)

@@ -1,10 +1,13 @@
 """The web side of a played game: the page, its moves, the turn clock, one page per game.
 
-    GET  /          the page (409 while another page holds the seat, or once the game is over)
+    GET  /          the page (409 once the game is over)
     GET  /seat      WebSocket: the page holding it holds the seat. The server sends
                     {"type": "seated", "token": ...} and then every step's view; the page sends
-                    nothing. Closing it before the end (the tab closed) forfeits the game.
-                    A second page gets {"type": "refused", "error": ...} and is closed.
+                    nothing. A page that closes before the end (a reload, the tab closed)
+                    frees the seat and pauses the clock; a page that takes the seat within
+                    the reconnect time (`RECONNECT`, `play --reconnect`) goes on with the
+                    game, else it is forfeited. While a page holds the seat, another gets
+                    {"type": "refused", "error": ...} and is closed.
     POST /move      {"action": 0..5 or "stop|up|down|left|right|bomb", "step": T}, with the
                     seat's token in the X-Seat-Token header: the person's action for step T
     POST /settings  {"turn_time": seconds or "wait", "paused": true|false} (either key), token too
@@ -45,6 +48,9 @@ WAIT = "wait"
 TURN_TIME_RANGE = (0.05, 60.0)  # seconds
 WATCH_STEP = 0.2  # seconds per step once the person is dead and the turn time is "wait"
 HEARTBEAT = 10.0  # seconds: a page gone without closing its socket is noticed within this
+RECONNECT = 30.0  # seconds a closed page has to come back (a reload) before the game is forfeited
+HANDOVER = 2.0  # seconds a new page waits for the one holding the seat to close (a reload's
+# new page asks before the old one's socket has closed)
 MAX_BODY_BYTES = 4 * 1024  # a move is a few dozen bytes
 TOKEN_HEADER = "X-Seat-Token"
 MOVE_NAMES = {action.name.lower(): int(action) for action in Action}
@@ -119,16 +125,22 @@ class Table:
     Only the clock (`run`) changes the game; request handlers leave a move or a change of
     settings and wake it."""
 
-    def __init__(self, game: HumanGame, out: Path, turn_time: float | None):
+    def __init__(self, game: HumanGame, out: Path, turn_time: float | None,
+                 reconnect: float = RECONNECT):
         self.game = game
         self.out = out
         self.turn_time = turn_time
+        self.reconnect = reconnect
         self.paused = False
         self.page: web.WebSocketResponse | None = None
         self.token: str | None = None
         self.move: int | None = None  # the person's action for the current step, once sent
         self.busy = False  # a step is being played
-        self.left: str | None = None  # why the page left, if it did
+        self.left: str | None = None  # why the person left for good, if they did
+        self.away_until: float | None = None  # while no page holds the seat: the loop time
+        # by which one must take it, or the game is forfeited
+        self.seat_free = asyncio.Event()  # no page holds the seat
+        self.seat_free.set()
         self.wake = asyncio.Event()
         self.seated = asyncio.Event()
         self.done = asyncio.Event()
@@ -138,13 +150,42 @@ class Table:
     def settings(self) -> dict:
         return {"turnTime": self.turn_time, "paused": self.paused}
 
-    def refusal(self) -> str | None:
-        """Why a new page cannot take the seat, if it cannot."""
+    def ended(self) -> str | None:
+        """Why no page can be served any more, if none can."""
         if self.game.over or self.left:
             return "this game is over; start the command again for a new one"
+        return None
+
+    def refusal(self) -> str | None:
+        """Why a new page cannot take the seat, if it cannot."""
+        if self.ended():
+            return self.ended()
         if self.page is not None:
             return "this game is already being played in another page"
         return None
+
+    async def refusal_after_handover(self) -> str | None:
+        """`refusal()`, once the page holding the seat has had `HANDOVER` seconds to close."""
+        if self.page is not None:
+            with contextlib.suppress(asyncio.TimeoutError):
+                await asyncio.wait_for(self.seat_free.wait(), HANDOVER)
+        return self.refusal()
+
+    def take_seat(self, page: web.WebSocketResponse) -> str:
+        """`page` holds the seat from now on: the token its requests must carry."""
+        self.page, self.token, self.away_until = page, secrets.token_urlsafe(16), None
+        self.seat_free.clear()
+        self.seated.set()
+        self.wake.set()  # a page back after leaving: the clock goes on
+        return self.token
+
+    def page_closed(self, page: web.WebSocketResponse) -> None:
+        """The page holding the seat closed: the seat is free for `reconnect` seconds."""
+        if self.page is page and not self.game.over:
+            self.page, self.token = None, None
+            self.seat_free.set()
+            self.away_until = asyncio.get_running_loop().time() + self.reconnect
+            self.wake.set()
 
     def check_token(self, request: web.Request) -> None:
         token = request.headers.get(TOKEN_HEADER)
@@ -177,6 +218,8 @@ class Table:
 
     def turn_timeout(self) -> float | None:
         """Seconds the clock waits for the current step; None: until woken."""
+        if self.away_until is not None:
+            return max(0.0, self.away_until - asyncio.get_running_loop().time())
         if self.paused:
             return None
         if not self.game.human_alive:
@@ -194,19 +237,23 @@ class Table:
         replay is saved and the page told."""
         await self.seated.wait()
         while True:
+            if self.away_until is not None and (
+                    asyncio.get_running_loop().time() >= self.away_until):
+                self.left = "the page was closed"
             if self.left:
                 self.game.leave(self.left)
             if self.game.over:
                 break
-            if self.move is None or self.paused:
+            if self.move is None or self.paused or self.away_until is not None:
                 try:
                     await asyncio.wait_for(self.wake.wait(), self.turn_timeout())
                     woken = True
                 except asyncio.TimeoutError:
                     woken = False
                 self.wake.clear()
-                if self.left or self.paused or (woken and self.move is None):
-                    continue  # left, paused, or the settings changed: a fresh turn
+                if (self.left or self.paused or self.away_until is not None
+                        or (woken and self.move is None)):
+                    continue  # left, paused, away, or the settings changed: a fresh turn
             action = int(Action.STOP) if self.move is None else self.move
             self.busy = True
             try:
@@ -268,7 +315,9 @@ def _page_data(table: Table) -> dict:
 
 async def page(request: web.Request) -> web.Response:
     table = request.app[TABLE]
-    reason = table.refusal()
+    # Served while another page holds the seat, which its socket then asks for: a reload's
+    # old page closes only once the new one has arrived.
+    reason = table.ended()
     if reason:
         return web.Response(status=409, text=f"Refused: {reason}.\n")
     return web.Response(text=page_html(__package__, "play.html", _page_data(table)),
@@ -279,20 +328,17 @@ async def seat(request: web.Request) -> web.WebSocketResponse:
     table = request.app[TABLE]
     socket = web.WebSocketResponse(heartbeat=HEARTBEAT)
     await socket.prepare(request)
-    reason = table.refusal()
+    reason = await table.refusal_after_handover()
     if reason:
         await socket.send_json({"type": "refused", "error": reason})
         await socket.close(code=WSCloseCode.POLICY_VIOLATION, message=b"refused")
         return socket
-    table.page, table.token = socket, secrets.token_urlsafe(16)
-    await socket.send_json({"type": "seated", "token": table.token, **table.game.view(),
+    token = table.take_seat(socket)
+    await socket.send_json({"type": "seated", "token": token, **table.game.view(),
                             **table.settings()})
-    table.seated.set()
     async for _ in socket:
         pass  # the page sends nothing: what matters is that it stays
-    if not table.game.over:
-        table.left = "the page was closed"
-        table.wake.set()
+    table.page_closed(socket)
     return socket
 
 
@@ -323,9 +369,10 @@ async def _clock(app: web.Application):
     task.cancel()
 
 
-def make_app(game: HumanGame, out: Path, turn_time: float | None) -> web.Application:
+def make_app(game: HumanGame, out: Path, turn_time: float | None,
+             reconnect: float = RECONNECT) -> web.Application:
     app = web.Application(client_max_size=MAX_BODY_BYTES, middlewares=[_refusals_as_json])
-    app[TABLE] = Table(game, out, turn_time)
+    app[TABLE] = Table(game, out, turn_time, reconnect)
     app.cleanup_ctx.append(_clock)
     app.router.add_get("/", page)
     app.router.add_get("/seat", seat)

@@ -19,10 +19,11 @@ REPLY_TIMEOUT = 10  # seconds for any server message in these tests
 
 
 def run_server(scenario: Callable[[TestClient, Table], Awaitable], out: Path,
-               turn_time: float | None = None, spec: PlaySpec = SPEC):
-    """Serve one game (turn time None: "wait") and run `scenario(client, table)` against it."""
+               turn_time: float | None = None, spec: PlaySpec = SPEC, reconnect: float = 0.0):
+    """Serve one game (turn time None: "wait"; a closed page forfeits after `reconnect`
+    seconds) and run `scenario(client, table)` against it."""
     async def main():
-        app = make_app(HumanGame(spec), out, turn_time)
+        app = make_app(HumanGame(spec), out, turn_time, reconnect)
         async with TestClient(TestServer(app)) as client:
             return await scenario(client, app[TABLE])
     return asyncio.run(main())

@@ -1,6 +1,6 @@
 """`python -m rllib_pommer.play` played in real headless Chromium with key presses: the server's
-game advances as pressed, the page draws the person's fog, a second page is refused, closing the
-tab forfeits, and the saved replay passes `replay verify`."""
+game advances as pressed, the page draws the person's fog, a second page is refused, a reload
+goes on with the game, closing the tab forfeits, and the saved replay passes `replay verify`."""
 
 from __future__ import annotations
 
@@ -34,6 +34,7 @@ def start_play(out) -> tuple[subprocess.Popen, str]:
     process = subprocess.Popen(
         [sys.executable, "-m", "rllib_pommer.play", "--team", "simple", "--vs", "static",
          "--seat", str(SEAT), "--seed", "3", "--port", "0", "--turn-time", "wait",
+         "--reconnect", "5",
          "--out", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     first = process.stdout.readline().split()
     if first[:2] != ["play", "at"]:
@@ -65,10 +66,13 @@ def test_a_game_played_with_key_presses_in_chromium(tmp_path):
             probes = probes[:, :3].reshape(11, 11, 3)
 
             second = browser.open(url)
-            second.wait_for("document.readyState === 'complete'")
-            assert "already being played in another page" in second.evaluate(
-                "document.body.innerText")
+            second.wait_for("document.body && document.body.innerText.includes("
+                            "'already being played in another page')")
 
+            page.evaluate("window.reloaded = false; location.reload()")
+            page.wait_for(f"window.reloaded === undefined && {PLAY} && {PLAY}.ready && "
+                          f"{PLAY}.seated()")
+            assert page.evaluate(f"{PLAY}.step()") == len(KEYS)
             page.close()
             stdout, stderr = process.communicate(timeout=30)
     finally:

@@ -1,6 +1,6 @@
 """The play server over HTTP: moves land on the steps they name, bad requests are refused without
-touching the game, the clock and pause, one page per game, and a closed page forfeits with a
-replay that verifies."""
+touching the game, the clock and pause, one page per game, a reloaded page goes on with the
+game, and a closed page that does not come back forfeits with a replay that verifies."""
 
 from __future__ import annotations
 
@@ -155,14 +155,14 @@ def test_a_second_page_is_refused_and_the_first_plays_on(tmp_path):
         return page.status, await page.text(), refused, closed.type, frame
 
     status, text, refused, closed, frame = run_server(scenario, tmp_path / "g.jsonl")
-    assert status == 409 and "already being played in another page" in text
+    assert status == 200 and "<canvas" in text  # the page is served; its socket is refused
     assert refused == {"type": "refused",
                        "error": "this game is already being played in another page"}
     assert closed.name == "CLOSE"
     assert frame["step"] == 1
 
 
-def test_a_closed_page_forfeits_and_saves_a_replay_that_verifies(tmp_path):
+def test_a_page_not_back_in_time_forfeits_and_saves_a_replay_that_verifies(tmp_path):
     out = tmp_path / "game.jsonl.gz"
 
     async def scenario(client, table):
@@ -172,11 +172,14 @@ def test_a_closed_page_forfeits_and_saves_a_replay_that_verifies(tmp_path):
         for t, action in enumerate(["down", "right", "bomb"]):
             await seat.move(action, t)
         await seat.socket.close()
+        await asyncio.sleep(0.1)
+        waited = not table.game.over  # the seat is kept for the reconnect time (0.5 s)
         await asyncio.wait_for(table.done.wait(), 10)
         after = await client.get("/")
-        return await seat.state(), after.status
+        return await seat.state(), after.status, waited
 
-    state, after = run_server(scenario, out)
+    state, after, waited = run_server(scenario, out, reconnect=0.5)
+    assert waited
     assert state["over"] and state["result"] == "forfeit" and state["replay"] == str(out)
     assert after == 409
     (record,) = read_games(out)
@@ -185,6 +188,45 @@ def test_a_closed_page_forfeits_and_saves_a_replay_that_verifies(tmp_path):
     assert [s["actions"][SPEC.seat] for s in record["steps"]] == [2, 4, 5]
     report = verify_games([record])
     assert (report.games, report.steps, report.mismatches) == (1, 3, [])
+
+
+def test_a_page_back_within_the_reconnect_time_goes_on_with_the_game(tmp_path):
+    """A reload: the clock (a step per 0.05 s) plays no step while no page holds the seat, the
+    new page is served and seated in the same game, the old page's token is refused, and the
+    new page's moves land; it may leave and come back again."""
+    async def settle(seat: Seat) -> int:
+        """Stop the clock's own steps (turn time "wait") and return the step it rests on."""
+        assert (await seat.post("/settings", {"turn_time": "wait"}))[0] == 200
+        await asyncio.sleep(0.2)  # a step under way when the setting came lands first
+        return (await seat.state())["step"]
+
+    async def move(seat: Seat, action: str, step: int) -> None:
+        assert (await seat.post("/move", {"action": action, "step": step}))[0] == 200
+        while (await seat.next_message())["step"] != step + 1:
+            pass  # frames of the steps the clock played before
+
+    async def scenario(client, table):
+        first = await Seat.take(client)
+        await first.socket.close()
+        await asyncio.sleep(0.3)
+        away = [(await first.state())["step"]]
+        await asyncio.sleep(0.5)
+        away.append((await first.state())["step"])
+        page = await client.get("/")
+        second = await Seat.take(client)
+        stale = await first.post("/settings", {"paused": True})
+        step = await settle(second)
+        await move(second, "right", step)
+        await second.socket.close()
+        third = await Seat.take(client)
+        await move(third, "bomb", step + 1)
+        actions = [a[SPEC.seat] for a in (await third.state())["actions"]]
+        return away, page.status, stale[0], step, actions, table.game.over
+
+    away, page, stale, step, actions, over = run_server(scenario, tmp_path / "g.jsonl",
+                                                        turn_time=0.05, reconnect=5.0)
+    assert away[0] == away[1] and page == 200 and stale == 403 and not over
+    assert actions[step:] == [int(Action.RIGHT), int(Action.BOMB)]
 
 
 def test_a_page_closed_before_any_move_saves_an_empty_game(tmp_path):
