@@ -11,6 +11,7 @@ from rllib_pommer.play import main
     (["--vs", "nosuch"], "error: unknown policy 'nosuch'"),
     (["--seat", "4"], "error: seat must be one of 0..3, got 4"),
     (["--port", "70000"], "error: --port must be in 0..65535, got 70000"),
+    (["--reconnect", "-1"], "error: --reconnect must be 0..3600 seconds, got -1.0"),
     (["--out", "no/such/folder/game.jsonl"], "error: --out no/such/folder/game.jsonl: folder "
                                              "no/such/folder does not exist"),
 ])
