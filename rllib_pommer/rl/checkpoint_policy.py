@@ -18,6 +18,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import pickle
+import pickletools
 import re
 import subprocess
 from functools import cache
@@ -117,14 +118,43 @@ def checkpoint_iteration(checkpoint: Path) -> int:
     return iteration
 
 
+def unreadable(path: Path) -> str | None:
+    """What is wrong with a JSON or pickle file (a Tune state file, a checkpoint's parts), if
+    anything: empty, cut short or malformed. A pickle is only parsed, never loaded."""
+    try:
+        data = path.read_bytes()
+        if not data:
+            return "empty"
+        if data[:1] in (b"{", b"["):
+            json.loads(data)
+        else:
+            for _ in pickletools.genops(data):
+                pass
+    except (OSError, ValueError) as exc:
+        return str(exc)
+    return None
+
+
+def checkpoint_complete(checkpoint: Path) -> bool:
+    """Whether a checkpoint folder holds every part whole: its metadata, the learner's module
+    state, and no JSON or pickle cut short. Tune copies a checkpoint into the run folder file by
+    file, so a run killed mid-copy leaves a folder with the newest iteration and not all of it;
+    packing must not keep that one in place of the older whole one."""
+    checkpoint = Path(checkpoint)
+    required = [checkpoint / "rllib_checkpoint.json", checkpoint / ALGORITHM_STATE,
+                checkpoint / MODULE_STATE]
+    parts = [*checkpoint.rglob("*.pkl"), *checkpoint.rglob("*.json")]
+    return all(p.is_file() for p in required) and not any(unreadable(p) for p in parts)
+
+
 def checkpoint_age(path: Path) -> tuple[int, float, str]:
     """A checkpoint's (training iteration, mtime, name), to find the newest: not its number,
     which Tune restarted below the highest one when it resumed under a stale counter (a resumed
     run wrote checkpoint_000036 after the checkpoint_000037 it resumed from; packing now resets
-    the counter, `tune_state.py`). One that cannot be read (cut
-    short, or older than algorithm states) comes first."""
+    the counter, `tune_state.py`). One that is not whole (`checkpoint_complete`) or cannot be
+    read (older than algorithm states) comes first."""
     try:
-        iteration = checkpoint_iteration(path)
+        iteration = checkpoint_iteration(path) if checkpoint_complete(path) else -1
     except (ValueError, OSError):
         iteration = -1
     return iteration, path.stat().st_mtime, path.name

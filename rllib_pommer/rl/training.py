@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import json
 import os
-import pickletools
 import shutil
 import socket
 import time
@@ -32,7 +31,7 @@ from ray import tune
 
 from ..viz.training import HISTORY_FILE, write_summary
 from . import ray_session, tune_state
-from .checkpoint_policy import checkpoint_age, checkpoint_iteration, trial_dirs
+from .checkpoint_policy import checkpoint_age, checkpoint_iteration, trial_dirs, unreadable
 from .config import build_config, check_pi_weights
 from .curriculum import Curriculum, load_curriculum
 from .names import LEARNER_THREADS_ENV
@@ -174,29 +173,12 @@ def check_run_dir(out: Path, resume: bool) -> None:
         raise ValueError(f"--resume: no run to resume in {out}")
     for pattern in STATE_PATTERNS:
         newest = max(out.glob(pattern), default=None)
-        problem = newest and _unreadable(newest)
+        problem = newest and unreadable(newest)
         if problem:
             raise ValueError(
                 f"--resume: {newest} is unreadable ({problem}); Tune would start the run over. "
                 f"Put back an intact copy (git checkout, for a run kept in git) or move the file "
                 f"aside to resume from the one before it")
-
-
-def _unreadable(path: Path) -> str | None:
-    """What is wrong with a Tune state file (JSON, or a pickle despite its name), if anything;
-    the pickle is only parsed, never loaded."""
-    try:
-        data = path.read_bytes()
-        if not data:
-            return "empty"
-        if data[:1] in (b"{", b"["):
-            json.loads(data)
-        else:
-            for _ in pickletools.genops(data):
-                pass
-    except (OSError, ValueError) as exc:
-        return str(exc)
-    return None
 
 
 def resumes_from_checkpoint(out: Path, resume: bool) -> bool:

@@ -22,6 +22,7 @@ from rllib_pommer.report import main as report
 from rllib_pommer.rl.checkpoint_policy import (
     ALGORITHM_STATE,
     MODULE_STATE,
+    checkpoint_complete,
     checkpoint_iteration,
     latest_checkpoint,
     load_checkpoint_net,
@@ -50,6 +51,7 @@ def _fake_run(run: Path, pi: PommerNet, iterations: int = 4, checkpoint_at: int 
         with (path / ALGORITHM_STATE).open("wb") as f:  # numpy scalars, as RLlib's metrics hold
             pickle.dump({"training_iteration": iteration,
                          "metrics_logger": {"stats": {"x": np.float64(1.5)}}}, f)
+        (path / "rllib_checkpoint.json").write_text('{"type": "Algorithm"}')
     (trial / "params.json").write_text(json.dumps(
         {"callbacks": "functools.partial(<class 'rllib_pommer.rl.callbacks.CurriculumCallback'>, "
                       "Curriculum(name='smoke', path=PosixPath('/elsewhere/smoke.toml'), ...)"}))
@@ -136,6 +138,30 @@ def test_export_names_what_is_missing(tmp_path, capsys):
     (trial / "checkpoint_000002" / ALGORITHM_STATE).write_bytes(pickle.dumps({"other": 1}))
     with pytest.raises(ValueError, match="algorithm_state.pkl: no training_iteration"):
         checkpoint_iteration(trial / "checkpoint_000002")
+
+
+def test_a_checkpoint_not_whole_is_never_the_newest(tmp_path):
+    """A run killed while Tune copied a checkpoint in leaves a newer folder without all of it:
+    the newest whole one is taken (by export, the arena and pack)."""
+    trial = _fake_run(tmp_path / "run", PommerNet())
+    whole = trial / "checkpoint_000002"
+    assert latest_checkpoint(trial) == whole
+    for cut in ("module_state", "metadata", "algorithm_state"):
+        newer = trial / "checkpoint_000003"
+        shutil.copytree(whole, newer)
+        with (newer / ALGORITHM_STATE).open("wb") as f:
+            pickle.dump({"training_iteration": 99}, f)
+        assert latest_checkpoint(trial) == newer  # whole, it would be the newest
+        if cut == "module_state":
+            data = (newer / MODULE_STATE).read_bytes()
+            (newer / MODULE_STATE).write_bytes(data[: len(data) // 2])
+        elif cut == "metadata":
+            (newer / "rllib_checkpoint.json").unlink()
+        else:
+            (newer / ALGORITHM_STATE).write_bytes(b"")
+        assert not checkpoint_complete(newer)
+        assert latest_checkpoint(trial) == whole, cut
+        shutil.rmtree(newer)
 
 
 def test_the_committed_campaign_exports_to_its_checkpoint(tmp_path, committed_campaign):
