@@ -2,7 +2,7 @@
 
     python -m rllib_pommer.train [--curriculum NAME|FILE] [--out RUN_DIR] [--resume]
                                  [--address RAY_ADDRESS] [--pi-weights FILE]
-    python -m rllib_pommer.train --out RUN_DIR --pack
+    python -m rllib_pommer.train --out RUN_DIR [--stop] [--pack]
     python -m rllib_pommer.train --out RUN_DIR --export policies/NAME
 
 Curricula are TOML files in `curriculum/` (default "quick"; "paper" is the paper's schedule). The
@@ -10,7 +10,9 @@ run directory (default runs/<curriculum name>) gets RLlib checkpoints and Tensor
 `--resume` continues an interrupted run from its last checkpoint. The arena plays a run's learner
 by its directory: `python -m rllib_pommer.evaluate --team runs/quick --vs static`.
 
-`--pack` shrinks a stopped run to what resuming needs (newest checkpoint, stage checkpoints, a
+`--stop` stops the run training in RUN_DIR (started by another command) right after its next
+checkpoint, as Ctrl-C would but without losing the iterations since the last one. `--pack`
+shrinks a stopped run to what resuming needs (newest checkpoint, stage checkpoints, a
 small history.csv of the results), so it can be committed or copied and continued with
 `--resume` on another machine, at another path. `--export` ships a run's learner as a policy
 file and a plain state_dict, as `policies/imitation` is, with a model card (its Fig. 3 and stage
@@ -47,12 +49,19 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m rllib_pommer.train", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     add_options(parser, RunSettings, HELP)
+    parser.add_argument("--stop", action="store_true",
+                        help="stop the run training in --out right after its next checkpoint "
+                             "(then pack it, with --pack), then exit")
     parser.add_argument("--pack", action="store_true",
                         help="shrink the stopped run in --out for another machine, then exit")
     parser.add_argument("--export", type=Path, metavar="POLICY_DIR",
                         help="write the learner of the run in --out as a policy (POLICY_DIR/pi.pt, "
                              "POLICY_DIR.toml; e.g. policies/ppo), then exit")
     args = parser.parse_args(argv)
+    if args.stop:
+        stopped = _stop(parser, args.out)
+        if stopped or not args.pack:
+            return stopped
     if args.pack:
         return _pack(parser, args.out)
     if args.export:
@@ -86,6 +95,19 @@ def main(argv: list[str] | None = None) -> int:
               f"(checkpoint {checkpoint}); continue with --resume --out {out}")
         return 130
     print(f"done: {result.path} (checkpoint {checkpoint})")
+    return 0
+
+
+def _stop(parser: argparse.ArgumentParser, out: Path | None) -> int:
+    if out is None:
+        parser.error("--stop needs --out RUN_DIR")
+    from .rl.training import stop_at_next_checkpoint
+
+    try:
+        stop_at_next_checkpoint(out)
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     return 0
 
 

@@ -25,12 +25,14 @@ PROC = Path("/proc")
 
 def _start_time(pid: int) -> str | None:
     """The process's start time in clock ticks since boot (tells a pid's reuse apart), or None
-    if there is no such process."""
+    if there is no such process, or only its exit status is left (a zombie its parent has not
+    waited for)."""
     try:
         stat = (PROC / str(pid) / "stat").read_text()
     except OSError:
         return None
-    return stat.rsplit(")", 1)[1].split()[19]  # field 22, counted after the command name
+    fields = stat.rsplit(")", 1)[1].split()  # counted after the command name
+    return None if fields[0] == "Z" else fields[19]  # fields 3 (state) and 22
 
 
 def record(run_dir: Path) -> None:
@@ -63,19 +65,37 @@ def session_processes(session_dir: str) -> list[int]:
     return sorted(found)
 
 
+def _note(run_dir: Path) -> dict | None:
+    """The run folder's note, or None if it has none (a new run, or one on a cluster)."""
+    try:
+        note = json.loads((Path(run_dir) / SESSION_FILE).read_text())
+        note = {key: note[key] for key in ("session_dir", "driver_pid", "driver_start")}
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    return note
+
+
+def live_driver(run_dir: Path) -> int | None:
+    """The pid of the driver training in `run_dir` now, if one is (the pid alone could be
+    another process's by now; its start time tells)."""
+    note = _note(run_dir)
+    if note is None or note["driver_start"] is None:
+        return None
+    return note["driver_pid"] if _start_time(note["driver_pid"]) == note["driver_start"] else None
+
+
 def reap(run_dir: Path) -> list[int]:
     """End the Ray processes left by the run last started in `run_dir` if its driver is gone;
     returns their pids. ValueError if that driver is still running."""
     path = Path(run_dir) / SESSION_FILE
-    try:
-        note = json.loads(path.read_text())
-        session_dir, pid, started = note["session_dir"], note["driver_pid"], note["driver_start"]
-    except (OSError, ValueError, KeyError, TypeError):
-        return []  # no note (a new run, or one on a cluster)
+    note = _note(run_dir)
+    if note is None:
+        return []
+    session_dir, pid = note["session_dir"], note["driver_pid"]
     if not (isinstance(session_dir, str) and os.path.isabs(session_dir)
             and Path(session_dir).name.startswith("session_")):
         return []  # not a Ray session folder: nothing here is safe to end
-    if started is not None and _start_time(pid) == started:
+    if live_driver(run_dir) is not None:
         raise ValueError(f"{Path(run_dir).resolve()}: a run (pid {pid}) is still training in "
                          f"this folder; stop it first")
     orphans = session_processes(session_dir)

@@ -21,6 +21,7 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import signal
 import socket
 import time
 from pathlib import Path
@@ -31,7 +32,13 @@ from ray import tune
 
 from ..viz.training import HISTORY_FILE, write_summary
 from . import ray_session, tune_state
-from .checkpoint_policy import checkpoint_age, checkpoint_iteration, trial_dirs, unreadable
+from .checkpoint_policy import (
+    checkpoint_age,
+    checkpoint_complete,
+    checkpoint_iteration,
+    trial_dirs,
+    unreadable,
+)
 from .config import build_config, check_pi_weights
 from .curriculum import Curriculum, load_curriculum
 from .names import LEARNER_THREADS_ENV
@@ -272,6 +279,50 @@ def train(curriculum: Curriculum, out: Path, settings: RunSettings):
     if result.error:
         raise RuntimeError(f"training failed: {result.error}")
     return result
+
+
+def stop_at_next_checkpoint(out: Path, say=print, poll: float = 2.0, settle: float = 5.0,
+                            timeout: float = 600.0) -> Path:
+    """Stop the run training in `out` right after its next whole checkpoint, as Ctrl-C would
+    (SIGINT to its driver), and wait for it to exit: a run stopped so loses no iteration. The
+    `settle` seconds give Tune time to register the checkpoint (`pack_run` corrects its state
+    if it had not). Returns that checkpoint; ValueError if no run is going in `out`, or it ended
+    before a checkpoint."""
+    out = Path(out).resolve()
+    pid = ray_session.live_driver(out)
+    if pid is None:
+        raise ValueError(f"--stop: no run is training in {out} (no live driver noted in its "
+                         f"{ray_session.SESSION_FILE})")
+    start = time.time()
+    say(f"{out}: waiting for the run's next checkpoint (driver pid {pid})")
+    while True:
+        if ray_session.live_driver(out) is None:
+            raise ValueError(f"--stop: the run in {out} ended before its next checkpoint")
+        if any(_taken_since(c, start) for t in trial_dirs(out) for c in t.glob("checkpoint_*")):
+            break
+        time.sleep(poll)
+    time.sleep(settle)
+    os.kill(pid, signal.SIGINT)
+    deadline = time.monotonic() + timeout
+    while ray_session.live_driver(out) is not None:
+        if time.monotonic() > deadline:
+            raise ValueError(f"--stop: the run in {out} (pid {pid}) did not exit within "
+                             f"{timeout:.0f} s of SIGINT")
+        time.sleep(poll)
+    checkpoint = max((c for t in trial_dirs(out) for c in t.glob("checkpoint_*")),
+                     key=checkpoint_age)
+    say(f"{out}: stopped after {checkpoint.parent.name}/{checkpoint.name} (iteration "
+        f"{checkpoint_iteration(checkpoint)})")
+    return checkpoint
+
+
+def _taken_since(checkpoint: Path, start: float) -> bool:
+    """Whether `checkpoint` is whole and was written after `start` (Tune may delete it
+    meanwhile)."""
+    try:
+        return checkpoint.stat().st_mtime > start and checkpoint_complete(checkpoint)
+    except OSError:
+        return False
 
 
 def pack_run(out: Path) -> dict:

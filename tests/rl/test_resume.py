@@ -125,7 +125,8 @@ def test_a_packed_run_resumes_at_another_path(tmp_path, pi_weights):
     history reads as one run, and the arena plays it. The run is left as stops have left the
     campaign's: Tune's state older than the newest checkpoint (a stop that beat Tune to
     registering it) and the newest checkpoint numbered below an older one (a resume under stale
-    numbers); the pack makes Tune resume from the newest, numbering on after it."""
+    numbers); the pack makes Tune resume from the newest, numbering on after it. The first run
+    is stopped by `train --stop`, right after a checkpoint."""
     started_from = tmp_path / "first" / "weights" / "pi.pt"  # removed with the old place
     started_from.parent.mkdir(parents=True)
     shutil.copy(pi_weights, started_from)
@@ -147,8 +148,12 @@ def test_a_packed_run_resumes_at_another_path(tmp_path, pi_weights):
     _wait_for(lambda: list(first.glob("*/checkpoint_000001")), process, 240, "2 iterations")
     (early_state,) = first.glob("experiment_state-*.json")
     early = early_state.read_bytes()
-    _wait_for(lambda: list(first.glob("*/checkpoint_000003")), process, 240, "4 iterations")
-    assert _interrupt(process) == 130
+    _wait_for(lambda: list(first.glob("*/checkpoint_000002")), process, 240, "3 iterations")
+    stop = subprocess.run([sys.executable, "-m", "rllib_pommer.train", "--out", str(first),
+                           "--stop"], cwd=REPO, capture_output=True, text=True, timeout=300)
+    assert stop.returncode == 0 and "stopped after PPO_" in stop.stdout, stop.stderr[-2000:]
+    assert process.wait(timeout=60) == 130  # it stopped as on Ctrl-C, after a checkpoint
+    assert max(p.name for p in first.glob("*/checkpoint_*")) > "checkpoint_000002"
     early_state.write_bytes(early)
     (trial,) = [p for p in first.iterdir() if p.is_dir() and p.name.startswith("PPO_")]
     *_, lower, higher = sorted(trial.glob("checkpoint_*"))
