@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..game.constants import TEAM_PRESET
 from .rates import wilson
 
 
@@ -51,12 +52,34 @@ def summarise(records: Sequence[GameRecord]) -> dict:
     out["games_with_own_bomb_death_a"] = games_with_own_death / n
     out["bombs_per_agent_a"] = float(np.mean([r.bombs_laid[s] for r, s in a_seats]))
     out["bombs_per_agent_b"] = float(np.mean([r.bombs_laid[s] for r, s in b_seats]))
+    # How the games ended: deaths per agent and how many by the agent's own bomb, the losses
+    # in which every agent of A died by its own bomb, and the ties the step limit decided.
+    for side, seats in (("a", a_seats), ("b", b_seats)):
+        out[f"dead_per_agent_{side}"] = sum(r.died[s] for r, s in seats) / len(seats)
+        out[f"own_bomb_dead_per_agent_{side}"] = sum(
+            r.own_bomb_deaths[s] for r, s in seats) / len(seats)
+    out["loss_own_bombs_only"] = sum(
+        r.result == "loss" and all(r.own_bomb_deaths[s] for s in r.seats_a) for r in records) / n
+    out["tie_at_step_limit"] = sum(
+        r.result == "tie" and r.length >= TEAM_PRESET.max_steps for r in records) / n
     return out
 
 
 def _mean_ci(values: np.ndarray) -> list[float]:
     half = 1.96 * values.std(ddof=1) / math.sqrt(len(values)) if len(values) > 1 else math.inf
     return [float(values.mean() - half), float(values.mean() + half)]
+
+
+def game_record(row: dict) -> GameRecord:
+    """A records file's row (`matches.read_rows`: list columns of a .csv are JSON text) as the
+    GameRecord it was written from."""
+    fields = {k: json.loads(v) if k in LIST_COLUMNS and isinstance(v, str) else v
+              for k, v in row.items()}
+    return GameRecord(**{**fields, "game": int(fields["game"]), "seed": int(fields["seed"]),
+                         "length": int(fields["length"])})
+
+
+LIST_COLUMNS = ("seats_a", "died", "own_bomb_deaths", "bombs_laid", "filters")
 
 
 def record_rows(records: Sequence[GameRecord]) -> Iterator[dict]:

@@ -11,6 +11,7 @@ from pathlib import Path
 
 from ..game.records import read_games, read_jsonl
 from .behaviour import heatmaps_by_opponent
+from .endings import endings_table, load_endings
 from .figures import (
     FIG5_MARKS,
     comparable_opponents,
@@ -71,8 +72,10 @@ def tables_section(records: list[Path], out: Path) -> Iterator[str]:
     yield ("Each cell: team A's win / loss / tie rates; ours over n games with their 95% Wilson "
            "intervals below them, the paper's over 1000 games last. Variants add jitter "
            "correction and/or the action filter.")
+    endings = load_endings(records)
     for team in sorted({match.team for match in outcomes}):
         yield results_table(team, outcomes)
+        yield endings_table(team, endings)
         ours = rates_by_opponent(outcomes, team)
         if comparable_opponents(ours):
             name = f"fig4_filters_{UNSAFE_IN_NAMES.sub('_', team)}.png"  # a team may be a path
