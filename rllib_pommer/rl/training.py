@@ -326,13 +326,18 @@ def _taken_since(checkpoint: Path, start: float) -> bool:
 
 
 def pack_run(out: Path) -> dict:
-    """Shrink the stopped run in `out` to what resuming and the report need (see above); safe to
-    repeat. The newest checkpoint (by iteration) is kept and made the one Tune resumes from
-    (`tune_state.register_only`). Returns what it kept: {trial name: (newest checkpoint name,
-    the name Tune's state had registered)}."""
+    """Shrink the stopped run in `out` to what resuming and the report need (see above), after
+    ending the Ray processes a killed run left (so its note, `ray_session.json`, goes too); safe
+    to repeat, refused while the run is training. The newest checkpoint (by iteration) is kept
+    and made the one Tune resumes from (`tune_state.register_only`). Returns what it kept:
+    {trial name: (newest checkpoint name, the name Tune's state had registered)}."""
     out = Path(out).resolve()  # Tune takes a relative path for a URI without a scheme
     if not tune.Tuner.can_restore(str(out)):
         raise ValueError(f"--pack: no run in {out}")
+    try:  # a run still training is refused; what a killed one left running is ended
+        ray_session.reap(out)
+    except ValueError as exc:
+        raise ValueError(f"--pack: {exc}") from None
     registered = tune_state.registered_checkpoints(out)
     kept, to_register = {}, {}
     for trial in trial_dirs(out):

@@ -135,6 +135,22 @@ def test_run_folders_are_checked_by_relative_path_too(tmp_path, monkeypatch):
         stop_at_next_checkpoint(Path("runs") / "new")
 
 
+def test_a_run_still_training_is_not_packed(tmp_path):
+    """Its driver (here: this process) is alive: pack touches nothing."""
+    from rllib_pommer.rl import ray_session
+
+    run = tmp_path / "run"
+    (run / "PPO_trial" / "checkpoint_000001").mkdir(parents=True)
+    (run / "tuner.pkl").write_bytes(b"")  # what Tune looks for
+    note = {"session_dir": str(tmp_path / "session_x"), "driver_pid": os.getpid(),
+            "driver_start": ray_session._start_time(os.getpid())}
+    (run / "ray_session.json").write_text(json.dumps(note))
+    before = sorted(p.relative_to(run) for p in run.rglob("*"))
+    with pytest.raises(ValueError, match=f"--pack: .* a run \\(pid {os.getpid()}\\) is still"):
+        pack_run(run)
+    assert sorted(p.relative_to(run) for p in run.rglob("*")) == before
+
+
 def _no_ray(monkeypatch):
     """Ray never starts: a start is noted in the returned list and fails (train exits 1)."""
     import ray
