@@ -21,6 +21,7 @@ whose state named an older checkpoint.
 from __future__ import annotations
 
 import json
+import os
 import re
 from pathlib import Path
 
@@ -69,7 +70,9 @@ def register_only(out: Path, kept: dict[str, tuple[Path, dict]]) -> None:
         trial.invalidate_json_state()
         trial.run_metadata.invalidate_cache()
         state["trial_data"][entry] = list(trial.get_json_state())
-    path.write_text(json.dumps(state))
+    temp = path.with_name(f".{path.name}.tmp")  # a kill mid-write leaves the old state whole
+    temp.write_text(json.dumps(state))
+    os.replace(temp, path)
 
 
 def _newest_state(out: Path) -> tuple[Path, dict]:
