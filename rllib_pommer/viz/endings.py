@@ -2,7 +2,8 @@
 their own bomb, which losses were the team's own bombs alone, and how many ties the step limit
 decided. A win rate does not say whether a team loses to its opponents or to itself, nor whether
 the games it does not win run out of time; these do, per match, from the same record files
-(`arena/records.summarise` over their rows).
+(`arena/records.summarise` over their rows). Files written without those columns (the tables
+need only `game`, `seats_a` and `result`) are left out.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from ..arena.records import game_record, summarise
 from .matches import VARIANTS, Match, match_of, read_rows
 from .paper import PAPER_OPPONENTS
 
+NEEDED = frozenset({"seed", "length", "died", "own_bomb_deaths", "bombs_laid"})
 COLUMNS = {  # summary key -> column heading
     "dead_per_agent_a": "ours dead per agent",
     "own_bomb_dead_per_agent_a": "… by own bomb",
@@ -31,15 +33,18 @@ def load_endings(paths: Iterable[Path]) -> dict[Match, dict]:
     rows_by_match: dict[Match, list] = {}
     for path in paths:
         rows = read_rows(path)
-        rows_by_match.setdefault(match_of(path, rows), []).extend(map(game_record, rows))
+        if all(set(row) >= NEEDED for row in rows):
+            rows_by_match.setdefault(match_of(path, rows), []).extend(map(game_record, rows))
     return {match: summarise(records) for match, records in rows_by_match.items() if records}
 
 
 def endings_table(team: str, endings: dict[Match, dict]) -> str:
     """One row per opponent and variant of `team`; every figure a share (of agents for the
-    deaths, of games for the results)."""
+    deaths, of games for the results). Empty if none of its files had the columns."""
     ours = sorted((m for m in endings if m.team == team),
                   key=lambda m: (m.vs, VARIANTS.index(m.variant)))
+    if not ours:
+        return ""
     lines = [f"#### How `{team}`'s games ended", "",
              "| opponent | variant | games | " + " | ".join(COLUMNS.values()) + " |",
              "|---" * (3 + len(COLUMNS)) + "|"]

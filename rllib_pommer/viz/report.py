@@ -75,7 +75,8 @@ def tables_section(records: list[Path], out: Path) -> Iterator[str]:
     endings = load_endings(records)
     for team in sorted({match.team for match in outcomes}):
         yield results_table(team, outcomes)
-        yield endings_table(team, endings)
+        if ended := endings_table(team, endings):
+            yield ended
         ours = rates_by_opponent(outcomes, team)
         if comparable_opponents(ours):
             name = f"fig4_filters_{UNSAFE_IN_NAMES.sub('_', team)}.png"  # a team may be a path

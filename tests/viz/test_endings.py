@@ -39,3 +39,10 @@ def test_endings_count_deaths_causes_and_ties_per_match(tmp_path):
     table = endings_table("ppo", {Match("ppo", "action", "simple"): summary})
     assert "| SimpleAgent | action | 4 | 0.625 | 0.375 | 0.500 | 0.125 | 0.250 | 0.250 | " \
            "0.500 | 0.250 |" in table
+
+
+def test_files_without_the_columns_are_left_out(tmp_path):
+    bare = tmp_path / "ppo__vs__static.jsonl"
+    bare.write_text('{"game": 0, "seats_a": [0, 2], "result": "win"}\n')
+    assert load_endings([bare]) == {}
+    assert endings_table("ppo", {}) == ""
