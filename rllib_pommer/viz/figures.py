@@ -51,11 +51,7 @@ def plot_training(curves: list[TrainingCurve], out: Path) -> Figure:
             ax.plot(curve.episodes[start:end], curve.returns[start:end], color=colour,
                     label=None if kind in labelled else curve.name)
             labelled.add(kind)
-            if stage:
-                ax.axvline(curve.episodes[start], color=colour, linestyle=":", linewidth=1)
-                ax.annotate(stage, (curve.episodes[start], 0.98), rotation=90, ha="right",
-                            va="top", fontsize=8, color=colour,
-                            xycoords=("data", "axes fraction"))
+            _mark_phase(ax, curve.episodes[start], stage, colour, k)
     for kind, ax in axes.items():
         ax.set_title(REWARD_AXES[kind], fontsize=10)
         ax.set_ylabel(f"learner's return: {WINDOW:,}-episode\nmean of RLlib's "
@@ -64,6 +60,40 @@ def plot_training(curves: list[TrainingCurve], out: Path) -> Figure:
         ax.legend(fontsize=8, loc="best")
     axes[kinds[-1]].set_xlabel("training episodes (lifetime)")
     fig.suptitle("Fig. 3: training reward per curriculum phase")
+    fig.savefig(out, dpi=DPI)
+    return fig
+
+
+def _mark_phase(ax, episode: float, stage: str, colour: str, run: int) -> None:
+    """A dotted line where a curriculum phase starts, named near the top: each run's names a
+    little lower than the one before, so two runs' phases that start together stay legible."""
+    if stage:
+        ax.axvline(episode, color=colour, linestyle=":", linewidth=1)
+        ax.annotate(stage, (episode, 0.98 - 0.2 * (run % 4)), rotation=90, ha="right",
+                    va="top", fontsize=8, color=colour, xycoords=("data", "axes fraction"))
+
+
+def plot_outcomes(curves: list[TrainingCurve], out: Path) -> Figure:
+    """Beside Fig. 3: each run's training win rate (solid) and loss rate (dashed), the same
+    rolling means per phase; one scale for every run, whatever its reward."""
+    fig = Figure(figsize=(9, 4.2), layout="constrained")
+    ax = fig.subplots()
+    for k, curve in enumerate(curves):
+        colour = f"C{k % 10}"
+        for n, (start, end, stage) in enumerate(phases(curve.stages)):
+            part = slice(start, end)
+            ax.plot(curve.episodes[part], curve.wins[part], color=colour,
+                    label=None if n else f"{curve.name}: win")
+            ax.plot(curve.episodes[part], curve.losses[part], color=colour, linestyle="--",
+                    label=None if n else f"{curve.name}: loss")
+            _mark_phase(ax, curve.episodes[start], stage, colour, k)
+    ax.set_ylim(0, 1)
+    ax.set_ylabel(f"learner's team: {WINDOW:,}-episode\nmean of RLlib's {RLLIB_WINDOW}-episode "
+                  f"rates")
+    ax.set_xlabel("training episodes (lifetime)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="best")
+    fig.suptitle("Training win and loss rates per curriculum phase (beside Fig. 3)")
     fig.savefig(out, dpi=DPI)
     return fig
 

@@ -17,6 +17,7 @@ from .figures import (
     comparable_opponents,
     plot_behaviour,
     plot_filter_effects,
+    plot_outcomes,
     plot_training,
 )
 from .frames import load_game
@@ -89,7 +90,9 @@ def fig3_section(paths: list[Path], out: Path, summaries: bool = True) -> Iterat
     """Fig. 3 and the stage table of the trials in `paths` (PNG into `out`); `summaries`: also
     keep each trial's rows, small, in `out`/runs/<run> (a card's trials are kept already)."""
     trials = [read_trial(path) for path in paths]
-    plot_training([training_curve(trial) for trial in trials], out / "fig3_training.png")
+    curves = [training_curve(trial) for trial in trials]
+    plot_training(curves, out / "fig3_training.png")
+    plot_outcomes(curves, out / "fig3_outcomes.png")
     named = Counter(trial.name for trial in trials)
     for k, trial in enumerate(trials if summaries else ()):  # the figure's data
         write_summary(trial, out / SUMMARIES / (
@@ -102,6 +105,9 @@ def fig3_section(paths: list[Path], out: Path, summaries: bool = True) -> Iterat
            f"iteration logs RLlib's mean return of the learner's last {RLLIB_WINDOW} episodes; "
            f"a curve averages those over the last {WINDOW:,} episodes (each iteration weighted "
            f"by the episodes it finished), restarted at each phase.")
+    yield "![training win and loss rates](fig3_outcomes.png)"
+    yield ("The same means of the learner's team's win and loss rates: one scale for every "
+           "run, whatever reward it was paid.")
     yield training_table([f for trial in trials for f in stage_figures(trial)])
     if summaries:
         yield (f"Each run's curve and training figures per iteration are in `{SUMMARIES}/<run>/"

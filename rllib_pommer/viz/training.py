@@ -73,6 +73,8 @@ class TrainingCurve:
     returns: np.ndarray
     stages: list[str]
     rewards: list[str]  # per row: "shaped", "raw" or "" (not known)
+    wins: np.ndarray  # the learner's team's win rate, the same rolling mean (NaN: not logged)
+    losses: np.ndarray
 
 
 def run_name(trial: Path) -> str:
@@ -249,14 +251,28 @@ def training_curve(trial: Trial | Path, window: int = WINDOW) -> TrainingCurve:
     counts = _episode_counts(trial)
     known = np.isfinite(means)
     episodes = np.cumsum(counts)[known]
-    means, counts = means[known], counts[known].astype(np.int64)
+    counts = counts[known].astype(np.int64)
     kept = [row for row, k in zip(rows, known, strict=True) if k]
     stages = [_stage_of(row) for row in kept]
-    curve = np.full(len(means), np.nan)
+
+    def curve(values: np.ndarray) -> np.ndarray:
+        return _phase_means(values, counts, stages, window)
+
+    return TrainingCurve(trial.name, episodes, curve(means[known]), stages,
+                         [str(row.get(REWARD_COLUMN) or "") for row in kept],
+                         curve(_values(kept, "env_runners/learner_win")),
+                         curve(_values(kept, "env_runners/learner_loss")))
+
+
+def _phase_means(values: np.ndarray, counts: np.ndarray, stages: list[str],
+                 window: int) -> np.ndarray:
+    """`rolling_mean` restarted at each phase; a row without a value weighs nothing."""
+    known = np.isfinite(values)
+    values, counts = np.where(known, values, 0.0), np.where(known, counts, 0)
+    means = np.full(len(values), np.nan)
     for start, end, _ in phases(stages):
-        curve[start:end] = rolling_mean(means[start:end], counts[start:end], window)
-    return TrainingCurve(trial.name, episodes, curve, stages,
-                         [str(row.get(REWARD_COLUMN) or "") for row in kept])
+        means[start:end] = rolling_mean(values[start:end], counts[start:end], window)
+    return means
 
 
 @dataclass

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from rllib_pommer.viz.behaviour import Heatmaps, heatmaps_by_opponent, to_top_left
-from rllib_pommer.viz.figures import FIG5_MARKS, plot_behaviour, plot_training
+from rllib_pommer.viz.figures import FIG5_MARKS, plot_behaviour, plot_outcomes, plot_training
 from rllib_pommer.viz.matches import Match, load_outcomes, match_of
 from rllib_pommer.viz.paper import PAPER_OPPONENTS, PAPER_TABLES, paper_table
 from rllib_pommer.viz.tables import training_table
@@ -42,6 +42,26 @@ def test_training_curve_from_progress_csv_restarts_at_each_phase(tmp_path):
     np.testing.assert_array_equal(curve.episodes, [600, 1200, 1700, 2200])
     np.testing.assert_allclose(curve.returns, [-1.0, -0.4, 1.0, 1.0])
     assert curve.stages == ["static", "static", "simple", "simple"]
+
+
+def test_win_and_loss_curves_are_the_same_means_and_skip_rows_without_them(tmp_path):
+    """Weighted by episodes, restarted per phase; a row that logged no rate weighs nothing, a
+    phase without any is NaN; the figure draws both per run on one 0..1 axis."""
+    trial = tmp_path / "PPO_pommer_00000"
+    trial.mkdir()
+    (trial / "progress.csv").write_text(
+        "env_runners/episode_return_mean,env_runners/num_episodes_lifetime,curriculum_stage,"
+        "env_runners/learner_win,env_runners/learner_loss\n"
+        "0.0,500,static,0.2,0.6\n0.0,1000,static,,\n0.0,1500,static,0.6,0.2\n"
+        "0.0,2000,simple,,\n")
+    curve = training_curve(trial)
+    np.testing.assert_allclose(curve.wins, [0.2, 0.2, 0.4, np.nan])
+    np.testing.assert_allclose(curve.losses, [0.6, 0.6, 0.4, np.nan])
+    fig = plot_outcomes([curve], tmp_path / "outcomes.png")
+    (ax,) = fig.axes
+    assert ax.get_ylim() == (0, 1)
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == [
+        f"{curve.name}: win", f"{curve.name}: loss"]
 
 
 def test_training_curve_from_nested_result_json_without_stages(tmp_path):
@@ -245,7 +265,7 @@ def test_each_rows_reward_kind_comes_from_the_log_or_else_the_trials_params(tmp_
 def test_fig3_draws_one_axis_per_reward_kind_and_says_what_its_mean_is_over(tmp_path):
     def curve(name, rewards):
         return TrainingCurve(name, np.arange(1, 5) * 100.0, np.linspace(-1, 0, 4),
-                             ["a", "a", "b", "b"], rewards)
+                             ["a", "a", "b", "b"], rewards, np.full(4, 0.5), np.full(4, 0.25))
 
     fig = plot_training([curve("paper", ["shaped"] * 4), curve("no_shaping", ["raw"] * 4)],
                         tmp_path / "fig3.png")
