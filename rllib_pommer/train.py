@@ -101,7 +101,7 @@ def main(argv: list[str] | None = None) -> int:
 def _stop(parser: argparse.ArgumentParser, out: Path | None) -> int:
     if out is None:
         parser.error("--stop needs --out RUN_DIR")
-    from .rl.training import stop_at_next_checkpoint
+    from .rl.packing import stop_at_next_checkpoint
 
     try:
         stop_at_next_checkpoint(out)
@@ -114,7 +114,7 @@ def _stop(parser: argparse.ArgumentParser, out: Path | None) -> int:
 def _pack(parser: argparse.ArgumentParser, out: Path | None) -> int:
     if out is None:
         parser.error("--pack needs --out RUN_DIR")
-    from .rl.training import pack_run
+    from .rl.packing import pack_run
 
     try:
         kept = pack_run(out)

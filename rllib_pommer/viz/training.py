@@ -2,7 +2,7 @@
 
 A trial directory holds `result.json` (one JSON result per line, flattened with "/" as Tune
 does; read first) or `progress.csv`, one row per training iteration, and, in a run packed to be
-carried to another machine (`rl.training.pack_run`), `history.csv`: the summary rows of the
+carried to another machine (`rl.packing.pack_run`), `history.csv`: the summary rows of the
 iterations before the pack, read before the others. result.json comes first
 because Tune's CSV appends a resumed run's rows in the new results' column order under the old
 header when the set of keys changed, which scrambles the columns. A resumed trial repeats the

@@ -15,7 +15,8 @@ import pytest
 from rllib_pommer.rl.checkpoint_policy import MODULE_STATE, load_checkpoint_net
 from rllib_pommer.rl.config import build_config
 from rllib_pommer.rl.curriculum import load_curriculum
-from rllib_pommer.rl.training import check_run_dir, init_ray, pack_run, stop_at_next_checkpoint
+from rllib_pommer.rl.packing import pack_run, stop_at_next_checkpoint
+from rllib_pommer.rl.training import check_run_dir, init_ray
 
 STAGE = '[[stage]]\nname = "a"\nopponent = "static"\nepisodes = 5\n'
 

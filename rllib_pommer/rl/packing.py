@@ -1,0 +1,125 @@
+"""Carrying a run to another machine: stop it right after a checkpoint, then pack its folder.
+
+`pack_run`, with the run stopped, folds the iterations' results into a small `history.csv` per
+trial (the curve and summary columns), keeps only the newest whole checkpoint, makes it the one
+Tune resumes from (`tune_state`) and drops Tune's growing logs, so the folder (a few MB plus the
+stage checkpoints) can be committed, copied to a fresh clone anywhere and resumed there with
+`train --resume` (`training.py`): Tune restores a moved experiment, and every path the run needs
+is rebuilt from the curriculum on the new machine. `stop_at_next_checkpoint` stops a run training
+in another process so that it loses no iteration.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import signal
+import time
+from pathlib import Path
+
+from ray import tune
+
+from ..viz.training import HISTORY_FILE, write_summary
+from . import ray_session, tune_state
+from .checkpoint_policy import (
+    checkpoint_age,
+    checkpoint_complete,
+    checkpoint_iteration,
+    trial_dirs,
+)
+from .training import STATE_PATTERNS
+
+
+def stop_at_next_checkpoint(out: Path, say=print, poll: float = 2.0, settle: float = 5.0,
+                            timeout: float = 600.0) -> Path:
+    """Stop the run training in `out` right after its next whole checkpoint, as Ctrl-C would
+    (SIGINT to its driver), and wait for it to exit: a run stopped so loses no iteration. The
+    `settle` seconds give Tune time to register the checkpoint (`pack_run` corrects its state
+    if it had not). Returns that checkpoint; ValueError if no run is going in `out`, or it ended
+    before a checkpoint."""
+    out = Path(out).resolve()
+    pid = ray_session.live_driver(out)
+    if pid is None:
+        raise ValueError(f"--stop: no run is training in {out} (no live driver noted in its "
+                         f"{ray_session.SESSION_FILE})")
+    start = time.time()
+    say(f"{out}: waiting for the run's next checkpoint (driver pid {pid})")
+    while True:
+        if ray_session.live_driver(out) is None:
+            raise ValueError(f"--stop: the run in {out} ended before its next checkpoint")
+        if any(_taken_since(c, start) for t in trial_dirs(out) for c in t.glob("checkpoint_*")):
+            break
+        time.sleep(poll)
+    time.sleep(settle)
+    os.kill(pid, signal.SIGINT)
+    deadline = time.monotonic() + timeout
+    while ray_session.live_driver(out) is not None:
+        if time.monotonic() > deadline:
+            raise ValueError(f"--stop: the run in {out} (pid {pid}) did not exit within "
+                             f"{timeout:.0f} s of SIGINT")
+        time.sleep(poll)
+    checkpoint = max((c for t in trial_dirs(out) for c in t.glob("checkpoint_*")),
+                     key=checkpoint_age)
+    say(f"{out}: stopped after {checkpoint.parent.name}/{checkpoint.name} (iteration "
+        f"{checkpoint_iteration(checkpoint)})")
+    return checkpoint
+
+
+def _taken_since(checkpoint: Path, start: float) -> bool:
+    """Whether `checkpoint` is whole and was written after `start` (Tune may delete it
+    meanwhile)."""
+    try:
+        return checkpoint.stat().st_mtime > start and checkpoint_complete(checkpoint)
+    except OSError:
+        return False
+
+
+def pack_run(out: Path) -> dict:
+    """Shrink the stopped run in `out` to what resuming and the report need (see above), after
+    ending the Ray processes a killed run left (so its note, `ray_session.json`, goes too); safe
+    to repeat, refused while the run is training. The newest checkpoint (by iteration) is kept
+    and made the one Tune resumes from (`tune_state.register_only`). Returns what it kept:
+    {trial name: (newest checkpoint name, the name Tune's state had registered)}."""
+    out = Path(out).resolve()  # Tune takes a relative path for a URI without a scheme
+    if not tune.Tuner.can_restore(str(out)):
+        raise ValueError(f"--pack: no run in {out}")
+    try:  # a run still training is refused; what a killed one left running is ended
+        ray_session.reap(out)
+    except ValueError as exc:
+        raise ValueError(f"--pack: {exc}") from None
+    registered = tune_state.registered_checkpoints(out)
+    kept, to_register = {}, {}
+    for trial in trial_dirs(out):
+        checkpoints = sorted(trial.glob("checkpoint_*"), key=checkpoint_age)
+        write_summary(trial, trial, HISTORY_FILE)
+        results = trial / "result.json"
+        rows = ([line for line in results.read_text().splitlines() if line.strip()]
+                if results.is_file() else [])
+        if rows:  # Tune reads the last result when it restores the trial
+            results.write_text(f"{rows[-1]}\n")
+        for stale in [*checkpoints[:-1], *trial.glob("events.out.tfevents.*"),
+                      trial / "progress.csv"]:
+            if stale.is_dir():
+                shutil.rmtree(stale)
+            elif stale.exists():
+                stale.unlink()
+        newest = checkpoints[-1] if checkpoints else None
+        kept[trial.name] = (newest and newest.name, registered.get(trial.name))
+        if newest:
+            to_register[trial.name] = (newest, _result_at(rows, checkpoint_iteration(newest)))
+    tune_state.register_only(out, to_register)
+    for pattern in STATE_PATTERNS:
+        for stale in sorted(out.glob(pattern))[:-1]:  # one per start; Tune reads the newest
+            stale.unlink()
+    return kept
+
+
+def _result_at(rows: list[str], iteration: int) -> dict:
+    """The result of `iteration` among result.json's lines (the newest such line), as Tune
+    records beside a checkpoint; {} if none survived."""
+    for line in reversed(rows):
+        result = json.loads(line)
+        if result.get("training_iteration") == iteration:
+            return result
+    return {}
