@@ -17,6 +17,7 @@ import contextlib
 import json
 import os
 import signal
+import time
 from pathlib import Path
 
 SESSION_FILE = "ray_session.json"
@@ -65,14 +66,19 @@ def session_processes(session_dir: str) -> list[int]:
     return sorted(found)
 
 
-def _note(run_dir: Path) -> dict | None:
-    """The run folder's note, or None if it has none (a new run, or one on a cluster)."""
-    try:
-        note = json.loads((Path(run_dir) / SESSION_FILE).read_text())
-        note = {key: note[key] for key in ("session_dir", "driver_pid", "driver_start")}
-    except (OSError, ValueError, KeyError, TypeError):
-        return None
-    return note
+def _note(run_dir: Path, attempts: int = 10) -> dict | None:
+    """The run folder's note, or None if it has none (a new run, or one on a cluster). Read
+    again if it is cut short: Tune copies the run folder it restored into its own staging folder
+    and syncs that back over the note, in place, every few seconds."""
+    for _ in range(attempts):
+        try:
+            note = json.loads((Path(run_dir) / SESSION_FILE).read_text())
+            return {key: note[key] for key in ("session_dir", "driver_pid", "driver_start")}
+        except FileNotFoundError:
+            return None
+        except (OSError, ValueError, KeyError, TypeError):
+            time.sleep(0.05)
+    return None
 
 
 def live_driver(run_dir: Path) -> int | None:
