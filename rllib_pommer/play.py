@@ -75,8 +75,7 @@ def main(argv: list[str] | None = None) -> int:
 
     try:
         table = asyncio.run(serve_game(make_app(game, out, args.turn_time, args.reconnect),
-                                       args.host, args.port,
-                                       announce))
+                                       args.host, args.port, announce))
     except OSError as exc:
         print(f"error: cannot serve on {args.host}:{args.port} ({exc})", file=sys.stderr)
         return 2

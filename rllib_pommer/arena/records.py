@@ -70,6 +70,9 @@ def _mean_ci(values: np.ndarray) -> list[float]:
     return [float(values.mean() - half), float(values.mean() + half)]
 
 
+LIST_COLUMNS = ("seats_a", "died", "own_bomb_deaths", "bombs_laid", "filters")
+
+
 def game_record(row: dict) -> GameRecord:
     """A records file's row (`matches.read_rows`: list columns of a .csv are JSON text) as the
     GameRecord it was written from."""
@@ -77,9 +80,6 @@ def game_record(row: dict) -> GameRecord:
               for k, v in row.items()}
     return GameRecord(**{**fields, "game": int(fields["game"]), "seed": int(fields["seed"]),
                          "length": int(fields["length"])})
-
-
-LIST_COLUMNS = ("seats_a", "died", "own_bomb_deaths", "bombs_laid", "filters")
 
 
 def record_rows(records: Sequence[GameRecord]) -> Iterator[dict]:

@@ -158,15 +158,13 @@ class Table:
 
     def refusal(self) -> str | None:
         """Why a new page cannot take the seat, if it cannot."""
-        if self.ended():
+        if self.page is None:
             return self.ended()
-        if self.page is not None:
-            return "this game is already being played in another page"
-        return None
+        return self.ended() or "this game is already being played in another page"
 
     async def refusal_after_handover(self) -> str | None:
         """`refusal()`, once the page holding the seat has had `HANDOVER` seconds to close."""
-        if self.page is not None:
+        if self.page is not None and not self.ended():
             with contextlib.suppress(asyncio.TimeoutError):
                 await asyncio.wait_for(self.seat_free.wait(), HANDOVER)
         return self.refusal()

@@ -48,7 +48,7 @@ def stop_at_next_checkpoint(out: Path, say=print, poll: float = 2.0, settle: flo
     while True:
         if ray_session.live_driver(out) is None:
             raise ValueError(f"--stop: the run in {out} ended before its next checkpoint")
-        if any(_taken_since(c, start) for t in trial_dirs(out) for c in t.glob("checkpoint_*")):
+        if any(_taken_since(c, start) for c in _checkpoints(out)):
             break
         time.sleep(poll)
     time.sleep(settle)
@@ -59,11 +59,14 @@ def stop_at_next_checkpoint(out: Path, say=print, poll: float = 2.0, settle: flo
             raise ValueError(f"--stop: the run in {out} (pid {pid}) did not exit within "
                              f"{timeout:.0f} s of SIGINT")
         time.sleep(poll)
-    checkpoint = max((c for t in trial_dirs(out) for c in t.glob("checkpoint_*")),
-                     key=checkpoint_age)
+    checkpoint = max(_checkpoints(out), key=checkpoint_age)
     say(f"{out}: stopped after {checkpoint.parent.name}/{checkpoint.name} (iteration "
         f"{checkpoint_iteration(checkpoint)})")
     return checkpoint
+
+
+def _checkpoints(out: Path) -> list[Path]:
+    return [c for trial in trial_dirs(out) for c in trial.glob("checkpoint_*")]
 
 
 def _taken_since(checkpoint: Path, start: float) -> bool:
@@ -88,8 +91,7 @@ def pack_run(out: Path) -> dict:
         ray_session.reap(out)
     except ValueError as exc:
         raise ValueError(f"--pack: {exc}") from None
-    registered = tune_state.registered_checkpoints(out)
-    kept, to_register = {}, {}
+    newest_of, to_register = {}, {}
     for trial in trial_dirs(out):
         checkpoints = sorted(trial.glob("checkpoint_*"), key=checkpoint_age)
         write_summary(trial, trial, HISTORY_FILE)
@@ -104,15 +106,16 @@ def pack_run(out: Path) -> dict:
                 shutil.rmtree(stale)
             elif stale.exists():
                 stale.unlink()
-        newest = checkpoints[-1] if checkpoints else None
-        kept[trial.name] = (newest and newest.name, registered.get(trial.name))
-        if newest:
-            to_register[trial.name] = (newest, _result_at(rows, checkpoint_iteration(newest)))
-    tune_state.register_only(out, to_register)
+        newest_of[trial.name] = checkpoints[-1] if checkpoints else None
+        if checkpoints:
+            to_register[trial.name] = (checkpoints[-1],
+                                       _result_at(rows, checkpoint_iteration(checkpoints[-1])))
+    registered = tune_state.register_only(out, to_register)
     for pattern in STATE_PATTERNS:
         for stale in sorted(out.glob(pattern))[:-1]:  # one per start; Tune reads the newest
             stale.unlink()
-    return kept
+    return {name: (newest and newest.name, registered.get(name))
+            for name, newest in newest_of.items()}
 
 
 def _result_at(rows: list[str], iteration: int) -> dict:

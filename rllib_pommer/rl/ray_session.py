@@ -82,12 +82,16 @@ def _note(run_dir: Path, attempts: int = 10) -> dict | None:
 
 
 def live_driver(run_dir: Path) -> int | None:
-    """The pid of the driver training in `run_dir` now, if one is (the pid alone could be
-    another process's by now; its start time tells)."""
+    """The pid of the driver training in `run_dir` now, if one is."""
     note = _note(run_dir)
-    if note is None or note["driver_start"] is None:
-        return None
-    return note["driver_pid"] if _start_time(note["driver_pid"]) == note["driver_start"] else None
+    return note["driver_pid"] if note is not None and _alive(note) else None
+
+
+def _alive(note: dict) -> bool:
+    """Whether the noted driver still runs (the pid alone could be another process's by now;
+    its start time tells)."""
+    started = note["driver_start"]
+    return started is not None and _start_time(note["driver_pid"]) == started
 
 
 def reap(run_dir: Path) -> list[int]:
@@ -101,7 +105,7 @@ def reap(run_dir: Path) -> list[int]:
     if not (isinstance(session_dir, str) and os.path.isabs(session_dir)
             and Path(session_dir).name.startswith("session_")):
         return []  # not a Ray session folder: nothing here is safe to end
-    if live_driver(run_dir) is not None:
+    if _alive(note):
         raise ValueError(f"{Path(run_dir).resolve()}: a run (pid {pid}) is still training in "
                          f"this folder; stop it first")
     orphans = session_processes(session_dir)

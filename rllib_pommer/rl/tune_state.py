@@ -33,24 +33,18 @@ EXPERIMENT_STATE = "experiment_state-*.json"
 CHECKPOINT_NUMBER = re.compile(r"checkpoint_(\d+)$")
 
 
-def registered_checkpoints(out: Path) -> dict[str, str | None]:
-    """{trial folder name: the checkpoint name Tune would resume it from} in the newest state."""
-    _, state = _newest_state(out)
-    names = {}
-    for trial_json, metadata_json in state["trial_data"]:
-        trial = _trial(trial_json, metadata_json)
-        latest = trial.run_metadata.checkpoint_manager.latest_checkpoint_result
-        names[trial.storage.trial_dir_name] = Path(latest.checkpoint.path).name if latest else None
-    return names
-
-
-def register_only(out: Path, kept: dict[str, tuple[Path, dict]]) -> None:
+def register_only(out: Path, kept: dict[str, tuple[Path, dict]]) -> dict[str, str | None]:
     """Make `kept` ({trial folder name: (checkpoint folder, its iteration's results)}) the only
-    registered checkpoint of each of those trials in the newest experiment state of `out`."""
+    registered checkpoint of each of those trials in the newest experiment state of `out`.
+    Returns, per trial of the state, the checkpoint name it had registered before."""
     path, state = _newest_state(out)
+    before = {}
     for entry, (trial_json, metadata_json) in enumerate(state["trial_data"]):
         trial = _trial(trial_json, metadata_json)
         name = trial.storage.trial_dir_name
+        manager = trial.run_metadata.checkpoint_manager
+        latest = manager.latest_checkpoint_result
+        before[name] = Path(latest.checkpoint.path).name if latest else None
         if name not in kept:
             continue
         checkpoint, metrics = kept[name]
@@ -62,7 +56,6 @@ def register_only(out: Path, kept: dict[str, tuple[Path, dict]]) -> None:
         result = _TrainingResult(
             checkpoint=Checkpoint(where, filesystem=trial.storage.storage_filesystem),
             metrics=metrics)
-        manager = trial.run_metadata.checkpoint_manager
         manager._checkpoint_results = [result]
         manager._latest_checkpoint_result = result
         trial.storage.current_checkpoint_index = int(number.group(1))
@@ -73,6 +66,7 @@ def register_only(out: Path, kept: dict[str, tuple[Path, dict]]) -> None:
     temp = path.with_name(f".{path.name}.tmp")  # a kill mid-write leaves the old state whole
     temp.write_text(json.dumps(state))
     os.replace(temp, path)
+    return before
 
 
 def _newest_state(out: Path) -> tuple[Path, dict]:
