@@ -15,7 +15,8 @@ agents compares with the reference's figures (tests/reference/reference_speed.js
   each and their ratio (`rl/speed.py`; meaningful on an otherwise idle machine);
 - `learn`: on a run's torch threads (one), the real RLlib PPO update (pi trainable, and frozen as
   in the value warm-up) and the real behaviour-cloning step, each beside its plain float32 NCHW
-  torch baseline, and this core's float32 FLOP bound (`rl/speed.py`, `imitation/speed.py`).
+  torch baseline, this core's float32 FLOP bound, and the learner connector's seconds on one
+  iteration with and without its trained-agents-only head (`rl/speed.py`, `imitation/speed.py`).
 
 Three runs each for engine and agents; min/median/max are printed. Pin the process to one core
 (`taskset -c 0`) to compare per core with the reference.

@@ -28,7 +28,7 @@ from .checkpoint_policy import (
     checkpoint_iteration,
     trial_dirs,
 )
-from .training import STATE_PATTERNS
+from .tune_state import STATE_PATTERNS
 
 
 def stop_at_next_checkpoint(out: Path, say=print, poll: float = 2.0, settle: float = 5.0,

@@ -5,7 +5,9 @@ zero-cost twin) and the learner.
 with the advantage estimation, then `num_epochs` passes of minibatches of 128 through the real
 `PommerPPOModule`) on batches the real env runner sampled with the quick curriculum's config, with
 pi trainable and with pi frozen (the value warm-up), beside the plain-torch baselines of
-`imitation/speed.py` on the same thread count. Samples/s count learner rows times epochs.
+`imitation/speed.py` on the same thread count. Samples/s count learner rows times epochs. It also
+times the learner connector alone on one iteration's episodes, with its `TrainedAgentsOnly` head
+and without it (every agent's rows built, then the fixed seats' dropped, as RLlib does).
 
 `layout_speeds` times the whole loop on the real env for each way of placing it on the machine:
 sampling in the learner's process, or remote env runners sampling while the learner waits.
@@ -21,7 +23,9 @@ identical, so the ratio of env steps/s says how much of the budget the game and 
 
 from __future__ import annotations
 
+import copy
 import os
+import statistics
 import tempfile
 import time
 from collections.abc import Iterator
@@ -30,6 +34,7 @@ from pathlib import Path
 
 import ray
 import torch
+from ray.rllib.connectors.learner.learner_connector_pipeline import LearnerConnectorPipeline
 from ray.rllib.execution.rollout_ops import synchronous_parallel_sample
 from ray.tune.registry import register_env
 
@@ -167,16 +172,40 @@ def _learner_samples_per_s(algo, frozen: bool, updates: int) -> float:
     return samples / seconds
 
 
+def _connector_seconds(algo, repeats: int) -> dict:
+    """Median seconds of the learner connector on one iteration's episodes (fresh copies each
+    time: the pipeline extends them), with its first piece (TrainedAgentsOnly) and without."""
+    learner = algo.learner_group._learner  # the local learner: no remote learners here
+    full = learner._learner_connector
+    all_agents = LearnerConnectorPipeline(connectors=full.connectors[1:])
+    episodes = synchronous_parallel_sample(
+        worker_set=algo.env_runner_group, max_env_steps=algo.config.total_train_batch_size,
+        _uses_new_env_runners=True)
+    times = {"trained_agents": [], "all_agents": []}
+    for _ in range(repeats):
+        for name, pipeline in (("trained_agents", full), ("all_agents", all_agents)):
+            batch_episodes = copy.deepcopy(episodes)
+            start = time.perf_counter()
+            pipeline(rl_module=learner.module, batch={}, episodes=batch_episodes,
+                     shared_data={}, metrics=learner.metrics)
+            times[name].append(time.perf_counter() - start)
+    trained, every = (statistics.median(times[k]) for k in ("trained_agents", "all_agents"))
+    return {"learner_connector_s": trained, "learner_connector_all_agents_s": every,
+            "learner_connector_speedup": every / trained}
+
+
 def _rllib_learner_speeds(updates: int, curriculum: str) -> dict:
-    """Learner samples/s of the real RLlib update, pi trainable and pi frozen."""
+    """Learner samples/s of the real RLlib update, pi trainable and pi frozen, and the seconds
+    of its connector."""
     with _random_pi_weights() as weights:
         algo = build_config(load_curriculum(curriculum), pi_weights=weights).build_algo()
         try:
             trainable = _learner_samples_per_s(algo, False, updates)
             frozen = _learner_samples_per_s(algo, True, updates)
+            connector = _connector_seconds(algo, repeats=updates)
         finally:
             algo.stop()
-    return {"ppo_samples_per_s": trainable, "ppo_frozen_pi_samples_per_s": frozen}
+    return {"ppo_samples_per_s": trainable, "ppo_frozen_pi_samples_per_s": frozen, **connector}
 
 
 def learner_speeds(updates: int = 3, curriculum: str = "quick") -> dict:

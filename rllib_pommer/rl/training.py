@@ -6,7 +6,11 @@ files, and `<run>/stages/<n>-<name>/`, the checkpoint at the end of each finishe
 stops once the lifetime episode count reaches the curriculum's total. `resume` restores the
 experiment (`tune.Tuner.restore`): the trial continues from its last checkpoint, and since the
 stage follows from the restored lifetime episode count, stage and counters pick up where they
-were, also after a SIGKILL.
+were, also after a SIGKILL: before Tune restores, the run is packed (`packing.pack_run`), which
+makes the newest whole checkpoint on disk the one Tune resumes from, whatever its state file had
+caught up with. Tune's state and the trial's result files reach the run folder once a second
+(`SNAPSHOT_PERIOD_S`), not on every 0.1-s controller step: that took three quarters of the
+driver's CPU (py-spy, the paper campaign).
 
 A run outlives the machine it ran on: `packing.py` stops it at a checkpoint and packs its folder
 for `--resume` anywhere.
@@ -30,9 +34,12 @@ from .checkpoint_policy import trial_dirs, unreadable
 from .config import build_config, check_pi_weights
 from .curriculum import Curriculum, load_curriculum
 from .names import LEARNER_THREADS_ENV
+from .packing import pack_run
 from .settings import RunSettings
+from .tune_state import STATE_PATTERNS
 
 STOP_KEY = "env_runners/num_episodes_lifetime"
+SNAPSHOT_PERIOD_S = "1"  # TUNE_GLOBAL_CHECKPOINT_S: at most a second of results lost to a SIGKILL
 
 
 class RayStartError(RuntimeError):
@@ -149,9 +156,6 @@ class StageCheckpoints(FreshOnRestore):
             shutil.copytree(checkpoint.path, run_dir / "stages" / ended, dirs_exist_ok=True)
 
 
-STATE_PATTERNS = ("experiment_state-*.json", "basic-variant-state-*.json")
-
-
 def check_run_dir(out: Path, resume: bool) -> None:
     """Refuse, before any work, an --out that cannot be used: a new run over an existing one,
     or a resume without a run or with an unreadable experiment state. (Tune, given an empty state
@@ -202,8 +206,8 @@ def kept_layouts(out: Path, settings: RunSettings) -> list[str]:
 def start_run(settings: RunSettings, say=print) -> tuple[Curriculum, Path]:
     """Everything a run checks before Ray starts, then Ray: the curriculum and the run directory
     (default runs/<curriculum name>), after ending what a SIGKILLed run in that directory left
-    running (told to `say`). Bad input is a ValueError; a Ray that does not start, a
-    `RayStartError`."""
+    running (told to `say`) and, to resume, packing it (module docstring). Bad input is a
+    ValueError; a Ray that does not start, a `RayStartError`."""
     curriculum = load_curriculum(settings.curriculum)
     out = settings.out or Path("runs") / curriculum.name
     ended = ray_session.reap(out)
@@ -214,6 +218,11 @@ def start_run(settings: RunSettings, say=print) -> tuple[Curriculum, Path]:
         say(note)
     if not resumes_from_checkpoint(out, settings.resume):  # else pi comes from the checkpoint
         check_pi_weights(settings.pi_weights or curriculum.pi_weights)
+    if settings.resume:
+        for trial, (kept, registered) in pack_run(out).items():
+            if kept != registered:
+                say(f"{trial}: resuming from {kept}, the newest whole checkpoint (Tune's state "
+                    f"named {registered})")
     init_ray(settings.address, num_cpus=settings.num_cpus, torch_threads=settings.torch_threads)
     if settings.address is None:  # our own Ray: note it, for the next start to clean up after
         ray_session.record(out)
@@ -236,9 +245,7 @@ def train(curriculum: Curriculum, out: Path, settings: RunSettings):
     initialised."""
     out = Path(out).resolve()
     resume = settings.resume
-    # Snapshot the experiment state on every controller step (not every ~10 s), so the state on
-    # disk always names the latest trial checkpoint and a SIGKILLed run resumes from it.
-    os.environ.setdefault("TUNE_GLOBAL_CHECKPOINT_S", "0")
+    os.environ.setdefault("TUNE_GLOBAL_CHECKPOINT_S", SNAPSHOT_PERIOD_S)
     config = build_config(curriculum, pi_weights=settings.pi_weights,
                           num_env_runners=settings.num_env_runners,
                           cpus_per_env_runner=cpus_per_env_runner(settings), seed=settings.seed,

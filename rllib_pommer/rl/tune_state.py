@@ -30,6 +30,7 @@ from ray.train._internal.session import _TrainingResult
 from ray.tune.experiment.trial import Trial
 
 EXPERIMENT_STATE = "experiment_state-*.json"
+STATE_PATTERNS = (EXPERIMENT_STATE, "basic-variant-state-*.json")  # one pair per start
 CHECKPOINT_NUMBER = re.compile(r"checkpoint_(\d+)$")
 
 

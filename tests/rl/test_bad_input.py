@@ -193,6 +193,7 @@ def test_a_resume_without_a_checkpoint_needs_the_weights(tmp_path, monkeypatch, 
     (run / "PPO_pommerman_team_0").mkdir(parents=True)
     (run / "PPO_pommerman_team_0" / "params.json").write_text("{}")
     monkeypatch.setattr("ray.tune.Tuner.can_restore", lambda path: True)
+    monkeypatch.setattr("rllib_pommer.rl.training.pack_run", lambda out: {})  # no Tune state
     with pytest.raises(SystemExit):
         main(["--curriculum", "smoke", "--out", str(run), "--resume",
               "--pi-weights", str(tmp_path / "absent.pt")])

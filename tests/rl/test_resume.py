@@ -19,7 +19,11 @@ import torch
 
 from rllib_pommer.imitation.learned import load_policy_net
 from rllib_pommer.rl import ray_session
-from rllib_pommer.rl.checkpoint_policy import checkpoint_iteration, load_checkpoint_net
+from rllib_pommer.rl.checkpoint_policy import (
+    checkpoint_complete,
+    checkpoint_iteration,
+    load_checkpoint_net,
+)
 from rllib_pommer.viz.training import read_rows
 
 REPO = Path(__file__).resolve().parents[2]
@@ -38,18 +42,20 @@ def _results(out):
 
 def test_resume_after_sigkill(tmp_path, pi_weights):
     """SIGKILL the driver alone (as the OOM killer does): Ray's agents outlive it, and the
-    experiment state may be left empty. The next start ends those orphans (and nothing else);
-    `--resume` refuses the empty state with one line and exit 2 instead of starting over; with
-    the state back it continues from the checkpoint."""
+    experiment state may be left empty, or behind the checkpoints. The next start ends those
+    orphans (and nothing else); `--resume` refuses the empty state with one line and exit 2
+    instead of starting over; with the state back, though it names an older checkpoint or none,
+    it continues from the newest checkpoint on disk."""
     out = tmp_path / "run"
     process = subprocess.Popen(_train(out, pi_weights), cwd=REPO, stdout=subprocess.DEVNULL,
                                stderr=subprocess.DEVNULL, start_new_session=True)
     try:
-        deadline = time.monotonic() + 240
-        while not list(out.glob("*/checkpoint_000000")) and time.monotonic() < deadline:
-            assert process.poll() is None, "training ended before it could be killed"
-            time.sleep(0.2)
-        time.sleep(1.0)  # let Tune write the experiment state that names the checkpoint
+        _wait_for(lambda: list(out.glob("*/checkpoint_000000")), process, 240, "a checkpoint")
+        (experiment_state,) = out.glob("experiment_state-*.json")
+        behind = experiment_state.read_bytes()  # names no checkpoint, or the first one
+        _wait_for(lambda: list(out.glob("*/checkpoint_000001")), process, 240,
+                  "a second checkpoint")
+        time.sleep(1.0)
         assert process.poll() is None, "training ended before it could be killed"
         process.kill()
         process.wait()
@@ -58,8 +64,10 @@ def test_resume_after_sigkill(tmp_path, pi_weights):
         orphans = ray_session.session_processes(session_dir)
         # checkpoint_00000k is written after iteration k + 1; Tune's result files of the killed
         # run may never have left its staging area, so the checkpoints are what survived.
-        checkpointed = len(list(out.glob("*/checkpoint_*")))
-        assert checkpointed >= 1
+        checkpoints = [c for c in out.glob("*/checkpoint_*") if checkpoint_complete(c)]
+        assert checkpoints
+        newest = max(checkpoint_iteration(c) for c in checkpoints)
+        experiment_state.write_bytes(behind)
         (state,) = out.glob("basic-variant-state-*.json")
         intact = state.read_bytes()
         state.write_bytes(b"")  # as a kill can leave it: Tune would start the run over
@@ -84,8 +92,9 @@ def test_resume_after_sigkill(tmp_path, pi_weights):
     resumed = [r for r in results if r["iterations_since_restore"] < r["training_iteration"]]
     assert resumed, "no iterations after a restore: the run started from scratch"
     first = resumed[0]
-    # Continues after a checkpoint, with the lifetime counters it had there.
-    assert 2 <= first["training_iteration"] <= checkpointed + 1
+    # Continues after the newest checkpoint on disk (whichever Tune's state had caught up
+    # with: the resume packs the run), with the lifetime counters it had there.
+    assert first["training_iteration"] == newest + 1
     assert first["curriculum"]["episodes"] > first["env_runners"]["num_episodes"]
     final = resumed[-1]
     assert final["curriculum"]["episodes"] >= final["curriculum"]["total_episodes"]
