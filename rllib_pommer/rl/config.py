@@ -32,7 +32,12 @@ and `bench train`, one core, figures in the README):
   to numpy again after each env step (quadratic in the episodes per call; 28% of sampling time in
   a profile of the paper curriculum); the learner connector batches lists as well, so episodes
   stay lists: sampling 1.2-1.6x, a whole iteration 1.1-1.2x the env steps/s (measured side by
-  side while another job shared the machine).
+  side while another job shared the machine);
+- the learner's connector batches only the agents of trained modules (`learner.py`,
+  `trained_agents.py`): RLlib builds every agent's rows and then drops the fixed seats'; the
+  learner batch is bit-identical, and the connector takes 0.33 s instead of 2.27 s on one
+  iteration of the paper curriculum, 0.33 s instead of 1.91 s on the quick one (`bench learn`,
+  side by side, both campaigns on the cores).
 """
 
 from __future__ import annotations
