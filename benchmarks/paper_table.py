@@ -7,7 +7,7 @@ Each cell is an arena match with seats balanced, written as `<team>[+filters]__v
 plus the `--json` summary beside it (`.json`), the layout `rllib_pommer.report` reads to print the
 table next to the paper's numbers. Finished cells are skipped, so an interrupted run resumes.
 Opponents default to the rows of the paper's table for the team (`imitation`: Table 2, `ppo`:
-Table 3) that name a policy we have (never Skynet; `ppo_cautious` once it is shipped), else to the
+Table 3) that name a policy we have (never Skynet), else to the
 scripted rows of Table 2. Not part of CI (about a minute per 1000-game cell).
 """
 
