@@ -5,9 +5,8 @@ RLlib's default optimizer is `torch.optim.Adam` with its per-tensor Python loop;
 kernel updates all of a module's parameters in one call: 0.18 ms instead of 0.65 ms per minibatch
 for pi and vf together (one thread), the same arithmetic.
 
-Its learner connector starts with `TrainedAgentsOnly` (trained_agents.py), set here rather than in
-the config so that runs restored with an older config get it: the fixed seats' rows are no longer
-built only to be dropped (2.27 s -> 0.33 s per paper-curriculum iteration, same batch).
+Its learner connector starts with `TrainedAgentsOnly` (trained_agents.py, with the measurement),
+set here rather than in the config so that runs restored with an older config get it.
 
 Before every update the learner module must have its pi from the imitation weights or from a
 restored checkpoint (rl_module.py: a restore builds the module before it loads the checkpoint, so

@@ -34,7 +34,6 @@ from pathlib import Path
 
 import ray
 import torch
-from ray.rllib.connectors.learner.learner_connector_pipeline import LearnerConnectorPipeline
 from ray.rllib.execution.rollout_ops import synchronous_parallel_sample
 from ray.tune.registry import register_env
 
@@ -46,6 +45,7 @@ from .env import ENV_NAME, PommeEnv
 from .names import LEARNER_THREADS_ENV
 from .rl_module import LEARNER
 from .settings import RunSettings
+from .trained_agents import every_agent_pipeline
 from .training import cpus_per_env_runner, init_ray
 
 ZERO_COST_ENV = "pommerman_team_zero_cost"
@@ -154,14 +154,19 @@ def _learner_rows(episodes) -> int:
                if e.module_id == LEARNER)
 
 
+def _sample_iteration(algo) -> list:
+    """One training batch's episodes, sampled as the algorithm's iteration does."""
+    return synchronous_parallel_sample(
+        worker_set=algo.env_runner_group, max_env_steps=algo.config.total_train_batch_size,
+        _uses_new_env_runners=True)
+
+
 def _learner_samples_per_s(algo, frozen: bool, updates: int) -> float:
     config = algo.config
     algo.learner_group.foreach_learner(lambda l: l.module[LEARNER].set_pi_frozen(frozen))
     samples = seconds = 0.0
     for update in range(updates + 1):  # the first update is a warm-up
-        episodes = synchronous_parallel_sample(
-            worker_set=algo.env_runner_group, max_env_steps=config.total_train_batch_size,
-            _uses_new_env_runners=True)
+        episodes = _sample_iteration(algo)
         start = time.perf_counter()
         algo.learner_group.update(episodes=episodes, num_epochs=config.num_epochs,
                                   minibatch_size=config.minibatch_size,
@@ -177,10 +182,8 @@ def _connector_seconds(algo, repeats: int) -> dict:
     time: the pipeline extends them), with its first piece (TrainedAgentsOnly) and without."""
     learner = algo.learner_group._learner  # the local learner: no remote learners here
     full = learner._learner_connector
-    all_agents = LearnerConnectorPipeline(connectors=full.connectors[1:])
-    episodes = synchronous_parallel_sample(
-        worker_set=algo.env_runner_group, max_env_steps=algo.config.total_train_batch_size,
-        _uses_new_env_runners=True)
+    all_agents = every_agent_pipeline(full)
+    episodes = _sample_iteration(algo)
     times = {"trained_agents": [], "all_agents": []}
     for _ in range(repeats):
         for name, pipeline in (("trained_agents", full), ("all_agents", all_agents)):

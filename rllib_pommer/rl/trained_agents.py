@@ -20,6 +20,7 @@ import copy
 from collections.abc import Callable
 
 from ray.rllib.connectors.connector_v2 import ConnectorV2
+from ray.rllib.connectors.learner.learner_connector_pipeline import LearnerConnectorPipeline
 from ray.rllib.env.multi_agent_episode import MultiAgentEpisode
 
 
@@ -43,3 +44,13 @@ class TrainedAgentsOnly(ConnectorV2):
         view.agent_episodes = {agent: single for agent, single in episode.agent_episodes.items()
                                if self._trained(single.module_id)}
         return view
+
+
+def every_agent_pipeline(pipeline: LearnerConnectorPipeline) -> LearnerConnectorPipeline:
+    """The pipeline RLlib builds, from ours without its `TrainedAgentsOnly` head (`bench learn`
+    and the tests compare the two)."""
+    head, *rest = pipeline.connectors
+    if not isinstance(head, TrainedAgentsOnly):
+        raise ValueError(f"the learner connector starts with {type(head).__name__}, "
+                         f"not TrainedAgentsOnly")
+    return LearnerConnectorPipeline(connectors=rest)

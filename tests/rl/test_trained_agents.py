@@ -7,12 +7,11 @@ import copy
 import numpy as np
 import torch
 import tree
-from ray.rllib.connectors.learner.learner_connector_pipeline import LearnerConnectorPipeline
 
 from rllib_pommer.rl.config import build_config
 from rllib_pommer.rl.curriculum import load_curriculum
 from rllib_pommer.rl.rl_module import LEARNER
-from rllib_pommer.rl.trained_agents import TrainedAgentsOnly
+from rllib_pommer.rl.trained_agents import TrainedAgentsOnly, every_agent_pipeline
 
 
 def _run(pipeline, learner, episodes):
@@ -32,7 +31,7 @@ def test_learner_batch_is_the_trained_agents_rows_of_the_default_pipeline(ray_se
         learner = algo.learner_group._learner
         full = learner._learner_connector
         assert isinstance(full.connectors[0], TrainedAgentsOnly)
-        default = LearnerConnectorPipeline(connectors=full.connectors[1:])
+        default = every_agent_pipeline(full)
         episodes = algo.env_runner.sample(num_timesteps=400, explore=True)
         seats = {episode.id_: set(episode.agent_episodes) for episode in episodes}
         assert any(len(agents) == 4 for agents in seats.values())
