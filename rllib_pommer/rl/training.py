@@ -8,9 +8,10 @@ experiment (`tune.Tuner.restore`): the trial continues from its last checkpoint,
 stage follows from the restored lifetime episode count, stage and counters pick up where they
 were, also after a SIGKILL: before Tune restores, the run is packed (`packing.pack_run`), which
 makes the newest whole checkpoint on disk the one Tune resumes from, whatever its state file had
-caught up with. Tune's state and the trial's result files reach the run folder once a second
-(`SNAPSHOT_PERIOD_S`), not on every 0.1-s controller step: that took three quarters of the
-driver's CPU (py-spy, the paper campaign).
+caught up with. Tune's state and the trial's result files reach the run folder every ten
+seconds (`SNAPSHOT_PERIOD_S`), not on every 0.1-s controller step: saving and copying them took
+three quarters of the driver's CPU (py-spy, the paper campaign), and still 7.8% of a core at one
+snapshot a second once the campaign's state had grown to 350 kB.
 
 A run outlives the machine it ran on: `packing.py` stops it at a checkpoint and packs its folder
 for `--resume` anywhere.
@@ -39,7 +40,9 @@ from .settings import RunSettings
 from .tune_state import STATE_PATTERNS
 
 STOP_KEY = "env_runners/num_episodes_lifetime"
-SNAPSHOT_PERIOD_S = "1"  # TUNE_GLOBAL_CHECKPOINT_S: at most a second of results lost to a SIGKILL
+# TUNE_GLOBAL_CHECKPOINT_S. A SIGKILL loses at most this many seconds of result rows, all of them
+# after the newest checkpoint, so the resume (which starts from that checkpoint) plays them again.
+SNAPSHOT_PERIOD_S = "10"
 
 
 class RayStartError(RuntimeError):

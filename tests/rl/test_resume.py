@@ -201,7 +201,9 @@ def test_a_packed_run_resumes_at_another_path(tmp_path, pi_weights):
     assert iterations == list(range(1, len(rows) + 1))  # one run, no gap, no restart
     assert _iteration(rows[len(before)]) == newest_iteration + 1  # from the newest
     assert checkpoint_iteration(moved_trial / lower.name) == newest_iteration  # not overwritten
-    after = sorted(moved_trial.glob("checkpoint_*"))
+    # a run stopped while a checkpoint is copied can leave that folder part-written (seen once:
+    # checkpoint_000012 without its algorithm state); packing passes over such a folder, as here
+    after = sorted(c for c in moved_trial.glob("checkpoint_*") if checkpoint_complete(c))
     assert after[0].name == lower.name and len(after) > 1  # new ones numbered after the kept
     assert [checkpoint_iteration(c) for c in after] == sorted(map(checkpoint_iteration, after))
     last, resumed = before[-1], rows[len(before)]
