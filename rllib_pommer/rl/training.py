@@ -9,10 +9,10 @@ stage follows from the restored lifetime episode count, stage and counters pick 
 were, also after a SIGKILL: before Tune restores, the run is packed (`packing.pack_run`), which
 makes the newest whole checkpoint on disk the one Tune resumes from, whatever its state file had
 caught up with. Tune saves its state and copies it with the trial's result files to the run
-folder at most once a minute (`SNAPSHOT_PERIOD_S`): each save cost the campaign's driver about
-0.5 s of CPU (py-spy: JSON and pickle of a 390-kB state, then copying every result file whole,
-files that grow all session), and with Tune's loop waking once per 12-s iteration a shorter period
-still saved every iteration: 7.1% of a core at 10 s, 7.8% at 1 s.
+folder once a minute (`SNAPSHOT_PERIOD_S`), also in a resumed run, whose saved state would keep
+the period it first started with (`tune_state.set_snapshot_period`): each save costs the driver
+about 0.4 s of CPU on the paper campaign (py-spy: JSON and pickle of a 390-kB state, then every
+result file copied whole), and saving on every 0.1-s controller step took 7-8% of a core.
 
 A run outlives the machine it ran on: `packing.py` stops it at a checkpoint and packs its folder
 for `--resume` anywhere.
@@ -31,14 +31,13 @@ import ray
 import torch
 from ray import tune
 
-from . import ray_session
+from . import ray_session, tune_state
 from .checkpoint_policy import trial_dirs, unreadable
 from .config import build_config, check_pi_weights
 from .curriculum import Curriculum, load_curriculum
 from .names import LEARNER_THREADS_ENV
 from .packing import pack_run
 from .settings import RunSettings
-from .tune_state import STATE_PATTERNS
 
 STOP_KEY = "env_runners/num_episodes_lifetime"
 # TUNE_GLOBAL_CHECKPOINT_S. A SIGKILL loses at most a minute of result rows (a gap of a few rows
@@ -174,7 +173,7 @@ def check_run_dir(out: Path, resume: bool) -> None:
         return
     if not exists:
         raise ValueError(f"--resume: no run to resume in {out}")
-    for pattern in STATE_PATTERNS:
+    for pattern in tune_state.STATE_PATTERNS:
         newest = max(out.glob(pattern), default=None)
         problem = newest and unreadable(newest)
         if problem:
@@ -255,7 +254,8 @@ def train(curriculum: Curriculum, out: Path, settings: RunSettings):
                           cpus_per_env_runner=cpus_per_env_runner(settings), seed=settings.seed,
                           restoring=resumes_from_checkpoint(out, resume))
     check_run_dir(out, resume)
-    if resume:
+    if resume:  # Tune would keep the period the run first started with (tune_state.py)
+        tune_state.set_snapshot_period(out, os.environ["TUNE_GLOBAL_CHECKPOINT_S"])
         tuner = tune.Tuner.restore(str(out), trainable=config.algo_class, param_space=config,
                                    resume_unfinished=True, resume_errored=True)
     else:

@@ -24,6 +24,7 @@ from rllib_pommer.rl.checkpoint_policy import (
     checkpoint_iteration,
     load_checkpoint_net,
 )
+from rllib_pommer.rl.training import SNAPSHOT_PERIOD_S
 from rllib_pommer.viz.training import read_rows
 
 REPO = Path(__file__).resolve().parents[2]
@@ -185,6 +186,10 @@ def test_a_packed_run_resumes_at_another_path(tmp_path, pi_weights):
                              timeout=120)
     assert refused.returncode == 2 and f"{state.name} is unreadable" in refused.stderr
     state.write_bytes(intact)
+    (experiment_state,) = first.glob("experiment_state-*.json")
+    saved = json.loads(experiment_state.read_text())
+    saved["runner_data"]["_checkpoint_period"] = "0"  # as the campaigns had first started
+    experiment_state.write_text(json.dumps(saved))
     moved = tmp_path / "clone" / "campaign" / "run"
     shutil.copytree(first, moved)
     shutil.rmtree(tmp_path / "first")  # nothing may point back to the old place
@@ -193,17 +198,19 @@ def test_a_packed_run_resumes_at_another_path(tmp_path, pi_weights):
                                cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                                start_new_session=True, env=elsewhere)
     moved_trial = moved / trial.name
-    _wait_for(lambda: len(read_rows(moved_trial)) >= len(before) + 2, process, 240,
-              "2 iterations after the resume")
+    # one new checkpoint, then stop: Tune keeps three, so more would evict the kept one
+    _wait_for(lambda: [c for c in moved_trial.glob("checkpoint_*")
+                       if c.name != lower.name and checkpoint_complete(c)], process, 240,
+              "a checkpoint after the resume")
     _interrupt(process)
+    resumed_state = json.loads(max(moved.glob("experiment_state-*.json")).read_text())
+    assert resumed_state["runner_data"]["_checkpoint_period"] == SNAPSHOT_PERIOD_S  # not "0"
     rows = read_rows(moved_trial)
     iterations = [_iteration(r) for r in rows]
     assert iterations == list(range(1, len(rows) + 1))  # one run, no gap, no restart
     assert _iteration(rows[len(before)]) == newest_iteration + 1  # from the newest
     assert checkpoint_iteration(moved_trial / lower.name) == newest_iteration  # not overwritten
-    # a run stopped while a checkpoint is copied can leave that folder part-written (seen once:
-    # checkpoint_000012 without its algorithm state); packing passes over such a folder, as here
-    after = sorted(c for c in moved_trial.glob("checkpoint_*") if checkpoint_complete(c))
+    after = sorted(moved_trial.glob("checkpoint_*"))
     assert after[0].name == lower.name and len(after) > 1  # new ones numbered after the kept
     assert [checkpoint_iteration(c) for c in after] == sorted(map(checkpoint_iteration, after))
     last, resumed = before[-1], rows[len(before)]
