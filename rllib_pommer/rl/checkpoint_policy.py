@@ -53,8 +53,11 @@ def latest_checkpoint(path: str | Path) -> Path:
 
 
 def trial_dirs(out: Path) -> list[Path]:
-    """The Tune trial folders of the run in `out`."""
-    return sorted(p for p in Path(out).resolve().glob("*") if (p / "params.json").is_file())
+    """The Tune trial folders of the run in `out`: those with Tune's params.json, or with
+    checkpoints alone, as a run killed before Tune first copied its files to the run folder
+    leaves them (the trainer writes its checkpoints there itself)."""
+    return sorted(p for p in Path(out).resolve().glob("*")
+                  if (p / "params.json").is_file() or any(p.glob("checkpoint_*")))
 
 
 class StateUnpickler(pickle.Unpickler):

@@ -9,10 +9,10 @@ stage follows from the restored lifetime episode count, stage and counters pick 
 were, also after a SIGKILL: before Tune restores, the run is packed (`packing.pack_run`), which
 makes the newest whole checkpoint on disk the one Tune resumes from, whatever its state file had
 caught up with. Tune saves its state and copies it with the trial's result files to the run
-folder once a minute (`SNAPSHOT_PERIOD_S`), also in a resumed run, whose saved state would keep
-the period it first started with (`tune_state.set_snapshot_period`): each save costs the driver
-about 0.4 s of CPU on the paper campaign (py-spy: JSON and pickle of a 390-kB state, then every
-result file copied whole), and saving on every 0.1-s controller step took 7-8% of a core.
+folder every 10 s (`SNAPSHOT_PERIOD_S`), also in a resumed run, whose saved state would keep the
+period it first started with (`tune_state.set_snapshot_period`): saving on every 0.1-s controller
+step took 7.5% of a core on the paper campaign (py-spy: JSON and pickle of a 390-kB state, then
+every result file copied whole).
 
 A run outlives the machine it ran on: `packing.py` stops it at a checkpoint and packs its folder
 for `--resume` anywhere.
@@ -40,9 +40,9 @@ from .packing import pack_run
 from .settings import RunSettings
 
 STOP_KEY = "env_runners/num_episodes_lifetime"
-# TUNE_GLOBAL_CHECKPOINT_S. A SIGKILL loses at most a minute of result rows (a gap of a few rows
-# in the curve), never a checkpoint: the trainer writes those itself, and `--resume` packs first.
-SNAPSHOT_PERIOD_S = "60"
+# TUNE_GLOBAL_CHECKPOINT_S. A SIGKILL loses at most these seconds of result rows, never a
+# checkpoint: the trainer writes those itself, and `--resume` packs first.
+SNAPSHOT_PERIOD_S = "10"
 
 
 class RayStartError(RuntimeError):
@@ -197,6 +197,8 @@ def kept_layouts(out: Path, settings: RunSettings) -> list[str]:
     new runs only (the learner's threads, outside the config, follow the command)."""
     notes = []
     for trial in trial_dirs(out) if settings.resume else []:
+        if not (trial / "params.json").is_file():  # killed before Tune copied it (trial_dirs)
+            continue
         params = json.loads((trial / "params.json").read_text())
         started = params.get("num_env_runners", 0)
         if started != settings.num_env_runners:

@@ -48,8 +48,11 @@ def test_resume_after_sigkill(tmp_path, pi_weights):
     instead of starting over; with the state back, though it names an older checkpoint or none,
     it continues from the newest checkpoint on disk."""
     out = tmp_path / "run"
+    # Tune copies its state and the trial's files only at the start: the kill finds the trial
+    # folder holding checkpoints alone, as a real kill does between two copies
     process = subprocess.Popen(_train(out, pi_weights), cwd=REPO, stdout=subprocess.DEVNULL,
-                               stderr=subprocess.DEVNULL, start_new_session=True)
+                               stderr=subprocess.DEVNULL, start_new_session=True,
+                               env={**os.environ, "TUNE_GLOBAL_CHECKPOINT_S": "600"})
     try:
         _wait_for(lambda: list(out.glob("*/checkpoint_000000")), process, 240, "a checkpoint")
         (experiment_state,) = out.glob("experiment_state-*.json")
@@ -66,7 +69,7 @@ def test_resume_after_sigkill(tmp_path, pi_weights):
         # checkpoint_00000k is written after iteration k + 1; Tune's result files of the killed
         # run may never have left its staging area, so the checkpoints are what survived.
         checkpoints = [c for c in out.glob("*/checkpoint_*") if checkpoint_complete(c)]
-        assert checkpoints
+        assert checkpoints and not list(out.glob("*/params.json"))
         newest = max(checkpoint_iteration(c) for c in checkpoints)
         experiment_state.write_bytes(behind)
         (state,) = out.glob("basic-variant-state-*.json")
@@ -91,7 +94,8 @@ def test_resume_after_sigkill(tmp_path, pi_weights):
     assert finished.returncode == 0, finished.stderr[-2000:]
     results = _results(out)
     resumed = [r for r in results if r["iterations_since_restore"] < r["training_iteration"]]
-    assert resumed, "no iterations after a restore: the run started from scratch"
+    assert resumed, ("no iterations after a restore: the run started from scratch\n"
+                     + finished.stdout[-3000:])
     first = resumed[0]
     # Continues after the newest checkpoint on disk (whichever Tune's state had caught up
     # with: the resume packs the run), with the lifetime counters it had there.
