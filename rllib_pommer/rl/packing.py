@@ -121,9 +121,9 @@ def pack_run(out: Path) -> dict:
 def _result_at(rows: list[str], iteration: int) -> dict:
     """The result of `iteration` among result.json's lines (the newest such line), as Tune
     records beside a checkpoint. If none survived (a run killed before Tune copied its result
-    files to the run folder), the iteration alone: Tune's trainable
-    restores its iteration counter from these metrics, and from {} would number the resumed
-    iterations from 1 again (and the history, reading that as a restore, drop every row)."""
+    files to the run folder), the iteration alone: Tune's trainable restores its iteration
+    counter from these metrics, and from {} would number the resumed iterations from 1 again
+    (and the history, reading that as a restore, drop every row)."""
     for line in reversed(rows):
         result = json.loads(line)
         if result.get("training_iteration") == iteration:

@@ -18,7 +18,7 @@ from pathlib import Path
 import torch
 
 from rllib_pommer.imitation.learned import load_policy_net
-from rllib_pommer.rl import ray_session
+from rllib_pommer.rl import ray_session, tune_state
 from rllib_pommer.rl.checkpoint_policy import (
     checkpoint_complete,
     checkpoint_iteration,
@@ -190,10 +190,7 @@ def test_a_packed_run_resumes_at_another_path(tmp_path, pi_weights):
                              timeout=120)
     assert refused.returncode == 2 and f"{state.name} is unreadable" in refused.stderr
     state.write_bytes(intact)
-    (experiment_state,) = first.glob("experiment_state-*.json")
-    saved = json.loads(experiment_state.read_text())
-    saved["runner_data"]["_checkpoint_period"] = "0"  # as the campaigns had first started
-    experiment_state.write_text(json.dumps(saved))
+    tune_state.set_snapshot_period(first, "0")  # as the campaigns had first started
     moved = tmp_path / "clone" / "campaign" / "run"
     shutil.copytree(first, moved)
     shutil.rmtree(tmp_path / "first")  # nothing may point back to the old place
