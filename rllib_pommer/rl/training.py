@@ -113,7 +113,9 @@ class FreshOnRestore(tune.Callback):
 
 class Progress(FreshOnRestore):
     """One line per iteration: stage, episodes, win/loss/tie, env steps/s and the time left in the
-    stage and in the run."""
+    stage and in the run, both at the games/s seen since the first result. The run's figure is a
+    floor early on: a curriculum's later games last longer (the paper campaign's first three
+    stages: 202, 315 and 538 env steps per game), so the line says whose pace it assumes."""
 
     def __init__(self):
         self._first: tuple[float, int] | None = None  # (time, episodes) of the first result seen
@@ -135,7 +137,7 @@ class Progress(FreshOnRestore):
               f"W/L/T {runners.get('learner_win', 0):.2f}/{runners.get('learner_loss', 0):.2f}/"
               f"{runners.get('learner_tie', 0):.2f}  return {runners.get('learner_return', 0):+.2f}"
               f"  {steps_per_s:.0f} env steps/s  ETA stage {_eta(stage_end - episodes, rate)}, "
-              f"run {_eta(total - episodes, rate)}",
+              f"run {_eta(total - episodes, rate)} at this stage's pace",
               flush=True)
 
 

@@ -26,7 +26,7 @@ def test_progress_line_and_eta_after_a_resume(monkeypatch, capsys):
     assert second.startswith("[1:value_warmup] iter 52  episodes 8200/100000  W/L/T 0.25/0.50/0.25")
     assert "400 env steps/s" in second
     # 1,800 episodes left in the stage at 2/s = 15 min; 91,800 in the run = 12 h 45 min.
-    assert second.endswith("ETA stage 15m00s, run 12h45m")
+    assert second.endswith("ETA stage 15m00s, run 12h45m at this stage's pace")
 
 
 def test_a_progress_pickled_by_an_older_version_resumes(capsys):
