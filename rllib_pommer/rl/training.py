@@ -114,8 +114,8 @@ class FreshOnRestore(tune.Callback):
 class Progress(FreshOnRestore):
     """One line per iteration: stage, episodes, win/loss/tie, env steps/s and the time left in the
     stage and in the run, both at the games/s seen since the first result. The run's figure is a
-    floor early on: a curriculum's later games last longer (the paper campaign's first three
-    stages: 202, 315 and 526 env steps per game), so the line says whose pace it assumes."""
+    floor early on, since a curriculum's later games may last longer (the paper campaign's are
+    measured in the README's Speed section), so the line says whose pace it assumes."""
 
     def __init__(self):
         self._first: tuple[float, int] | None = None  # (time, episodes) of the first result seen
