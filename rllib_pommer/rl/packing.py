@@ -2,11 +2,11 @@
 
 `pack_run`, with the run stopped, folds the iterations' results into a small `history.csv` per
 trial (the curve and summary columns), keeps only the newest whole checkpoint, makes it the one
-Tune resumes from (`tune_state`) and drops Tune's growing logs, so the folder (a few MB plus the
-stage checkpoints) can be committed, copied to a fresh clone anywhere and resumed there with
-`train --resume` (`training.py`): Tune restores a moved experiment, and every path the run needs
-is rebuilt from the curriculum on the new machine. `stop_at_next_checkpoint` stops a run training
-in another process so that it loses no iteration.
+Tune resumes from (`tune_state`) and drops Tune's growing logs (progress.csv down to its header),
+so the folder (a few MB plus the stage checkpoints) can be committed, copied to a fresh clone
+anywhere and resumed there with `train --resume` (`training.py`): Tune restores a moved
+experiment, and every path the run needs is rebuilt from the curriculum on the new machine.
+`stop_at_next_checkpoint` stops a run training in another process so that it loses no iteration.
 """
 
 from __future__ import annotations
@@ -100,8 +100,8 @@ def pack_run(out: Path) -> dict:
                 if results.is_file() else [])
         if rows:  # Tune reads the last result when it restores the trial
             results.write_text(f"{rows[-1]}\n")
-        for stale in [*checkpoints[:-1], *trial.glob("events.out.tfevents.*"),
-                      trial / "progress.csv"]:
+        _keep_header(trial / "progress.csv")
+        for stale in [*checkpoints[:-1], *trial.glob("events.out.tfevents.*")]:
             if stale.is_dir():
                 shutil.rmtree(stale)
             elif stale.exists():
@@ -116,6 +116,16 @@ def pack_run(out: Path) -> dict:
             stale.unlink()
     return {name: (newest and newest.name, registered.get(name))
             for name, newest in newest_of.items()}
+
+
+def _keep_header(progress: Path) -> None:
+    """Cut Tune's progress.csv to its header line: the rows live on in history.csv, and Tune's
+    CSV logger, which copies the file back from the run folder on resume, appends below it (a
+    deleted file made it warn "Remote file not found" on every resume)."""
+    if progress.is_file():
+        with open(progress, newline="") as f:
+            header = f.readline()
+        progress.write_text(header if header.endswith("\n") else "")
 
 
 def _result_at(rows: list[str], iteration: int) -> dict:

@@ -181,6 +181,7 @@ def test_a_packed_run_resumes_at_another_path(tmp_path, pi_weights):
     assert f"it now resumes from {lower.name}" in packed.stdout
     assert [p.name for p in trial.glob("checkpoint_*")] == [lower.name]
     assert (trial / "history.csv").is_file() and not list(trial.glob("events.out.tfevents.*"))
+    assert len((trial / "progress.csv").read_text().splitlines()) == 1  # the header, for Tune
     before = read_rows(trial)
     (state,) = first.glob("basic-variant-state-*.json")  # pack keeps the newest only
     intact = state.read_bytes()
@@ -195,15 +196,18 @@ def test_a_packed_run_resumes_at_another_path(tmp_path, pi_weights):
     shutil.copytree(first, moved)
     shutil.rmtree(tmp_path / "first")  # nothing may point back to the old place
     assert not pi_weights.exists()
-    process = subprocess.Popen(_train(moved, None, "--curriculum", str(curriculum), "--resume"),
-                               cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                               start_new_session=True, env=elsewhere)
+    resumed_log = tmp_path / "resumed.log"
+    with open(resumed_log, "wb") as log:
+        process = subprocess.Popen(_train(moved, None, "--curriculum", str(curriculum),
+                                          "--resume"), cwd=tmp_path, stdout=subprocess.DEVNULL,
+                                   stderr=log, start_new_session=True, env=elsewhere)
     moved_trial = moved / trial.name
     # one new checkpoint, then stop: Tune keeps three, so more would evict the kept one
     _wait_for(lambda: [c for c in moved_trial.glob("checkpoint_*")
                        if c.name != lower.name and checkpoint_complete(c)], process, 240,
               "a checkpoint after the resume")
     _interrupt(process)
+    assert "Remote file not found" not in resumed_log.read_text()  # Tune found what it reads
     resumed_state = json.loads(max(moved.glob("experiment_state-*.json")).read_text())
     assert resumed_state["runner_data"]["_checkpoint_period"] == SNAPSHOT_PERIOD_S  # not "0"
     rows = read_rows(moved_trial)
