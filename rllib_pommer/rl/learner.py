@@ -1,5 +1,5 @@
-"""PPO's torch learner with three changes: Adam runs fused, its connector batches only the agents it
-trains, and it never trains a pi without weights.
+"""PPO's torch learner with four changes: Adam runs fused, its connector batches only the agents it
+trains, it never trains a pi without weights, and it skips an update whose gradients are not finite.
 
 RLlib's default optimizer is `torch.optim.Adam` with its per-tensor Python loop; the fused CPU
 kernel updates all of a module's parameters in one call: 0.18 ms instead of 0.65 ms per minibatch
@@ -11,6 +11,15 @@ set here rather than in the config so that runs restored with an older config ge
 Before every update the learner module must have its pi from the imitation weights or from a
 restored checkpoint (rl_module.py: a restore builds the module before it loads the checkpoint, so
 a missing weights file is only an error once training would start from random weights).
+
+A minibatch with a non-finite gradient is skipped whole: no optimizer step, Adam's moments kept.
+RLlib's default instead replaces nan by 0 and inf by the largest float32 and steps, which sets
+Adam's second moment of every such weight to inf for good. The paper campaign's first run met
+this at 81,100 games (6,770 warnings until 100,000): from then its training win rate against
+SimpleAgent fell from 0.76 to 0.24 and pi's logit spread (largest minus smallest logit, median
+over the decisions of 16 games) grew from about 20 to 8,100, so that it never placed a bomb against
+StaticAgent. Each iteration logs how many updates it skipped (`nonfinite_updates_skipped`) and
+the largest batch-mean logit spread pi produced (`pi_logit_spread`), both kept in history.csv.
 """
 
 from __future__ import annotations
@@ -19,6 +28,7 @@ import os
 
 import torch
 from ray.rllib.algorithms.ppo.torch.ppo_torch_learner import PPOTorchLearner
+from ray.rllib.core.columns import Columns
 
 from .names import LEARNER_THREADS_ENV
 from .rl_module import LEARNER
@@ -42,6 +52,22 @@ class PommerPPOLearner(PPOTorchLearner):
         self.register_optimizer(module_id=module_id,
                                 optimizer=torch.optim.Adam(params, fused=True), params=params,
                                 lr_or_lr_schedule=config.lr)
+
+    def compute_loss_for_module(self, *, module_id, config, batch, fwd_out):
+        if module_id == LEARNER:
+            logits = fwd_out[Columns.ACTION_DIST_INPUTS].detach()
+            spread = (logits.max(-1).values - logits.min(-1).values).mean()
+            self.metrics.log_value((module_id, "pi_logit_spread"), spread.item(), reduce="max")
+        return super().compute_loss_for_module(module_id=module_id, config=config, batch=batch,
+                                               fwd_out=fwd_out)
+
+    def apply_gradients(self, gradients_dict) -> None:
+        finite = all(grad is None or torch.isfinite(grad).all()
+                     for grad in gradients_dict.values())
+        self.metrics.log_value((LEARNER, "nonfinite_updates_skipped"), int(not finite),
+                               reduce="sum")
+        if finite:  # else no step: the next minibatch's backward starts from zeroed gradients
+            super().apply_gradients(gradients_dict)
 
     def before_gradient_based_update(self, *, timesteps) -> None:
         super().before_gradient_based_update(timesteps=timesteps)

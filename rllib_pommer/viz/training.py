@@ -59,7 +59,8 @@ SUMMARY_COLUMNS = (
     "training_iteration", "time_total_s", "env_runners/num_env_steps_sampled_lifetime",
     "curriculum/pi_frozen", "env_runners/learner_win", "env_runners/learner_loss",
     "env_runners/learner_tie", "env_runners/learner_override_share",
-    "env_runners/episode_len_mean", "learners/learner/vf_explained_var")
+    "env_runners/episode_len_mean", "learners/learner/vf_explained_var",
+    "learners/learner/pi_logit_spread", "learners/learner/nonfinite_updates_skipped")
 WINDOW = 1000
 RLLIB_WINDOW = 100  # RLlib's metrics_num_episodes_for_smoothing, which our config leaves as is
 

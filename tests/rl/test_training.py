@@ -79,6 +79,10 @@ def test_stage_boundary_and_warmup_freeze(smoke):
         assert played == smoke["curriculum"].stages[it["stage"]].name
     last = iterations[-1]["result"]["env_runners"]
     assert {"learner_win", "learner_loss", "learner_tie", "learner_return"} <= set(last)
+    for it in iterations:  # the learner's health metrics (learner.py), on every iteration
+        health = it["result"]["learners"][LEARNER]
+        assert health["nonfinite_updates_skipped"] == 0
+        assert 0 < health["pi_logit_spread"] < 1e3
     shares = [it["result"]["env_runners"].get("learner_override_share", 0) for it in iterations]
     assert max(shares) > 0, "the filters never overrode an action"
 
