@@ -35,7 +35,7 @@ from . import ray_session, tune_state
 from .checkpoint_policy import trial_dirs, unreadable
 from .config import build_config, check_pi_weights
 from .curriculum import Curriculum, load_curriculum
-from .names import LEARNER_THREADS_ENV
+from .names import LEARNER, LEARNER_THREADS_ENV
 from .packing import pack_run
 from .settings import RunSettings
 
@@ -115,7 +115,8 @@ class Progress(FreshOnRestore):
     """One line per iteration: stage, episodes, win/loss/tie, env steps/s and the time left in the
     stage and in the run, both at the games/s seen since the first result. The run's figure is a
     floor early on, since a curriculum's later games may last longer (the paper campaign's are
-    measured in the README's Speed section), so the line says whose pace it assumes."""
+    measured in the README's Speed section), so the line says whose pace it assumes. An iteration
+    whose learner skipped updates for non-finite gradients (learner.py) says how many."""
 
     def __init__(self):
         self._first: tuple[float, int] | None = None  # (time, episodes) of the first result seen
@@ -137,8 +138,13 @@ class Progress(FreshOnRestore):
               f"W/L/T {runners.get('learner_win', 0):.2f}/{runners.get('learner_loss', 0):.2f}/"
               f"{runners.get('learner_tie', 0):.2f}  return {runners.get('learner_return', 0):+.2f}"
               f"  {steps_per_s:.0f} env steps/s  ETA stage {_eta(stage_end - episodes, rate)}, "
-              f"run {_eta(total - episodes, rate)} at this stage's pace",
+              f"run {_eta(total - episodes, rate)} at this stage's pace{_skipped(result)}",
               flush=True)
+
+
+def _skipped(result: dict) -> str:
+    skipped = result.get("learners", {}).get(LEARNER, {}).get("nonfinite_updates_skipped", 0)
+    return f"  ({skipped:.0f} updates skipped: non-finite gradients)" if skipped else ""
 
 
 class StageCheckpoints(FreshOnRestore):

@@ -29,6 +29,14 @@ def test_progress_line_and_eta_after_a_resume(monkeypatch, capsys):
     assert second.endswith("ETA stage 15m00s, run 12h45m at this stage's pace")
 
 
+def test_progress_line_tells_of_skipped_updates(capsys):
+    result = _result(53, 1_200)
+    result["learners"] = {"learner": {"nonfinite_updates_skipped": 3}}
+    training.Progress().on_trial_result(1, [], None, result)
+    assert capsys.readouterr().out.rstrip().endswith(
+        "at this stage's pace  (3 updates skipped: non-finite gradients)")
+
+
 def test_a_progress_pickled_by_an_older_version_resumes(capsys):
     old = training.Progress.__new__(training.Progress)
     old.__dict__.update({"_start": 5.0, "_first_episodes": 1134})  # the fields it once had
