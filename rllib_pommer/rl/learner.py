@@ -14,7 +14,9 @@ a missing weights file is only an error once training would start from random we
 
 A minibatch with a non-finite gradient is skipped whole: no optimizer step, Adam's moments kept.
 RLlib's default instead replaces nan by 0 and inf by the largest float32 and steps, which sets
-Adam's second moment of every such weight to inf for good. The paper campaign's first run met
+Adam's second moment of every such weight to inf for good; its `torch_skip_nan_gradients=True`
+does not help, as RLlib 2.60 then steps with the non-finite gradients as they are (and a restored
+run keeps the config it started with). The paper campaign's first run met
 this at 81,100 games (6,770 warnings until 100,000): from then its training win rate against
 SimpleAgent fell from 0.76 to 0.24 and pi's logit spread (largest minus smallest logit, median
 over the decisions of 16 games) grew from about 20 to 8,100, so that it never placed a bomb against

@@ -11,7 +11,7 @@ from rllib_pommer.rl.rl_module import LEARNER
 
 
 def _adam_moments(learner) -> list[torch.Tensor]:
-    return [state[key].clone() for optimizer in learner._named_optimizers.values()
+    return [state[key].clone() for _, optimizer in learner.get_optimizers_for_module(LEARNER)
             for state in optimizer.state.values() for key in ("exp_avg", "exp_avg_sq")]
 
 
