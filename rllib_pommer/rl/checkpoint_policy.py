@@ -15,7 +15,9 @@ running code.
 
 from __future__ import annotations
 
+import csv
 import dataclasses
+import io
 import json
 import pickle
 import pickletools
@@ -29,13 +31,16 @@ import torch
 from ..agents.registry import PolicySpec, register_kind
 from ..imitation.learned import LearnedAgent, LearnedPolicy
 from ..imitation.network import PommerNet
-from ..viz.training import Trial, read_trial, write_summary
+from ..viz.training import HISTORY_FILE, Trial, number, read_trial, write_summary
 from .curriculum import Curriculum, load_curriculum
 
 MODULE_STATE = Path("learner_group/learner/rl_module/learner/module_state.pkl")
 ALGORITHM_STATE = "algorithm_state.pkl"
 # How params.json records the CurriculumCallback partial of rl/config.py (its repr).
 CURRICULUM_IN_PARAMS = re.compile(r"Curriculum\(name='([^']+)'")
+# A history row's identity across commits (the clock is not: a pack may have repaired it).
+LINEAGE_COLUMNS = ("env_runners/num_env_steps_sampled_lifetime",
+                   "env_runners/num_episodes_lifetime")
 
 
 def latest_checkpoint(path: str | Path) -> Path:
@@ -190,17 +195,57 @@ def _trial_of(checkpoint: Path) -> Path:
     return trials[0]
 
 
-def _source(policy: str, checkpoint: Path, trial: Path, iteration: int,
+def packed_commits(run: Path, trial: Trial) -> list[str]:
+    """The commits (newest first) that packed the rows `trial` holds: each commit of the run
+    folder whose kept checkpoint's iteration has, in that commit's history of the trial, the row
+    `trial.rows` has (same env steps and episodes; rows logged after that checkpoint were run
+    again on resume). A run set back to an earlier pack and trained again leaves commits of rows
+    it abandoned (the paper campaign's collapsed run, `43d4aa6`), and a policy exported before
+    the newest pack was not trained through the later ones: both are left out. A commit without
+    a history or checkpoint of the trial (an older layout) is kept."""
+    ours = {number(row.get("training_iteration")): row for row in trial.rows}
+    commits = []
+    for commit in _git(run, "log", "--format=%h", "--", ".").split():
+        saved = _git(run, "show", f"{commit}:./{trial.path.name}/{HISTORY_FILE}")
+        iteration = _packed_iteration(run, commit, trial.path.name)
+        theirs = [row for row in csv.DictReader(io.StringIO(saved))
+                  if number(row.get("training_iteration")) == iteration]
+        if theirs:
+            row = ours.get(iteration)
+            if row is None or any(number(row.get(c)) != number(theirs[-1].get(c))
+                                  for c in LINEAGE_COLUMNS if c in theirs[-1]):
+                continue
+        commits.append(commit)
+    return commits
+
+
+def _packed_iteration(run: Path, commit: str, trial_name: str) -> int | None:
+    """The iteration of the checkpoint that `commit` holds for the trial (None: none read)."""
+    listed = _git(run, "ls-tree", "-r", "--name-only", commit, "--", trial_name).split()
+    state = next((name for name in listed if name.endswith(f"/{ALGORITHM_STATE}")), None)
+    if state is None:
+        return None
+    blob = subprocess.run(["git", "-C", str(run), "show", f"{commit}:./{state}"],
+                          capture_output=True).stdout
+    try:
+        iteration = StateUnpickler(io.BytesIO(blob)).load().get("training_iteration")
+    except (pickle.UnpicklingError, EOFError, ValueError, TypeError, AttributeError,
+            IndexError):
+        return None
+    return iteration if isinstance(iteration, int) else None
+
+
+def _source(policy: str, checkpoint: Path, trial: Trial, iteration: int,
             curriculum: Curriculum) -> dict:
     """What `viz/model_card.py` says of where a policy came from."""
     run = checkpoint.parents[1]
     return {
-        "policy": policy, "run": run.name, "trial": trial.name,
+        "policy": policy, "run": run.name, "trial": trial.path.name,
         "checkpoint": f"{checkpoint.parent.name}/{checkpoint.name}", "iteration": iteration,
         "curriculum": {"name": curriculum.name, "description": curriculum.description,
                        "stages": [dataclasses.asdict(stage) for stage in curriculum.stages]},
         "exported_at_commit": _git(run, "rev-parse", "--short", "HEAD") or "unknown",
-        "run_commits": _git(run, "log", "--format=%h", "--", ".").split(),
+        "run_commits": packed_commits(run, trial),
     }
 
 
@@ -235,7 +280,8 @@ def export_policy(source: str | Path, target: str | Path) -> tuple[Path, Path, P
                               f"{checkpoint.name}; see {target.name}/{CARD_FILE}", greedy=False)
     write_summary(Trial(trial.path, rows), target / TRAINING_DIR / trial.name)
     (target / SOURCE_FILE).write_text(json.dumps(
-        _source(target.name, checkpoint, trial.path, iteration, curriculum), indent=1) + "\n")
+        _source(target.name, checkpoint, Trial(trial.path, rows), iteration, curriculum),
+        indent=1) + "\n")
     return weights, policy_file, write_model_card(target)
 
 

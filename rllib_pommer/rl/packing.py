@@ -12,6 +12,7 @@ experiment, and every path the run needs is rebuilt from the curriculum on the n
 from __future__ import annotations
 
 import json
+import math
 import os
 import shutil
 import signal
@@ -20,7 +21,7 @@ from pathlib import Path
 
 from ray import tune
 
-from ..viz.training import HISTORY_FILE, write_summary
+from ..viz.training import HISTORY_FILE, Trial, number, read_trial, write_summary
 from . import ray_session, tune_state
 from .checkpoint_policy import (
     checkpoint_age,
@@ -94,12 +95,15 @@ def pack_run(out: Path) -> dict:
     newest_of, to_register = {}, {}
     for trial in trial_dirs(out):
         checkpoints = sorted(trial.glob("checkpoint_*"), key=checkpoint_age)
-        write_summary(trial, trial, HISTORY_FILE)
+        iteration = checkpoint_iteration(checkpoints[-1]) if checkpoints else None
+        summary = read_trial(trial)
+        write_summary(summary, trial, HISTORY_FILE)
         results = trial / "result.json"
-        rows = ([line for line in results.read_text().splitlines() if line.strip()]
-                if results.is_file() else [])
-        if rows:  # Tune reads the last result when it restores the trial
-            results.write_text(f"{rows[-1]}\n")
+        rows = _results(results)
+        if rows:  # Tune reads the last; a pack repeated later finds the checkpoint's too
+            kept = [line for line, result in rows
+                    if iteration is None or result.get("training_iteration", 0) >= iteration]
+            results.write_text("".join(f"{line}\n" for line in kept or [rows[-1][0]]))
         _keep_header(trial / "progress.csv")
         for stale in [*checkpoints[:-1], *trial.glob("events.out.tfevents.*")]:
             if stale.is_dir():
@@ -108,8 +112,7 @@ def pack_run(out: Path) -> dict:
                 stale.unlink()
         newest_of[trial.name] = checkpoints[-1] if checkpoints else None
         if checkpoints:
-            to_register[trial.name] = (checkpoints[-1],
-                                       _result_at(rows, checkpoint_iteration(checkpoints[-1])))
+            to_register[trial.name] = (checkpoints[-1], _result_at(rows, summary, iteration))
     registered = tune_state.register_only(out, to_register)
     for pattern in STATE_PATTERNS:
         for stale in sorted(out.glob(pattern))[:-1]:  # one per start; Tune reads the newest
@@ -128,14 +131,28 @@ def _keep_header(progress: Path) -> None:
         progress.write_text(header if header.endswith("\n") else "")
 
 
-def _result_at(rows: list[str], iteration: int) -> dict:
-    """The result of `iteration` among result.json's lines (the newest such line), as Tune
-    records beside a checkpoint. If none survived (a run killed before Tune copied its result
-    files to the run folder), the iteration alone: Tune's trainable restores its iteration
-    counter from these metrics, and from {} would number the resumed iterations from 1 again
-    (and the history, reading that as a restore, drop every row)."""
-    for line in reversed(rows):
-        result = json.loads(line)
-        if result.get("training_iteration") == iteration:
-            return result
-    return {"training_iteration": iteration}
+def _results(path: Path) -> list[tuple[str, dict]]:
+    """result.json's lines with what they hold; a line cut short (a killed write) is left out."""
+    if not path.is_file():
+        return []
+    parsed = []
+    for line in path.read_text().splitlines():
+        try:
+            parsed.append((line, json.loads(line)))
+        except json.JSONDecodeError:
+            continue
+    return parsed
+
+
+def _result_at(rows: list[tuple[str, dict]], summary: Trial, iteration: int) -> dict:
+    """The result of `iteration` (the newest such line of result.json), as Tune records beside a
+    checkpoint, its clock taken from the trial's summary rows (carried on over any restore that
+    lost it, viz/training.py). If no line survived (a run killed before Tune copied its result
+    files to the run folder), the iteration and its clock alone: Tune's trainable restores its
+    iteration counter and clock from these metrics, and from {} would number the resumed
+    iterations from 1 again (and the history, reading that as a restore, drop every row)."""
+    result = next((r for _, r in reversed(rows) if r.get("training_iteration") == iteration),
+                  {"training_iteration": iteration})
+    clock = next((number(row.get("time_total_s")) for row in reversed(summary.rows)
+                  if number(row.get("training_iteration")) == iteration), math.nan)
+    return {**result, "time_total_s": clock} if math.isfinite(clock) else result

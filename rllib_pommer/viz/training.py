@@ -6,7 +6,10 @@ carried to another machine (`rl.packing.pack_run`), `history.csv`: the summary r
 iterations before the pack, read before the others. result.json comes first
 because Tune's CSV appends a resumed run's rows in the new results' column order under the old
 header when the set of keys changed, which scrambles the columns. A resumed trial repeats the
-iterations after its checkpoint: the rows of the restored run replace the ones it discarded. A
+iterations after its checkpoint: the rows of the restored run replace the ones it discarded. Its
+clock, `time_total_s`, restarts at 0 when Tune restored it from a checkpoint registered without
+its result (a pack repeated after the result.json line was cut, `rl.packing`): a clock that runs
+back while the iterations go on is carried on from the last time before it. A
 line that is not JSON (a write cut short: a live run mid-line, or a run killed mid-write and then
 resumed) is skipped with a warning naming the file and line. Columns used:
 
@@ -134,7 +137,8 @@ def read_rows(trial: Path) -> list[dict]:
         rows += _csv_rows(trial / "progress.csv")
     started_with = _started_reward(trial)
     return [row if row.get(REWARD_COLUMN) or not started_with
-            else {**row, REWARD_COLUMN: started_with} for row in without_discarded(rows)]
+            else {**row, REWARD_COLUMN: started_with}
+            for row in with_continuous_clock(without_discarded(rows))]
 
 
 def _started_reward(trial: Path) -> str:
@@ -195,6 +199,23 @@ def without_discarded(rows: list[dict]) -> list[dict]:
         last = iteration if math.isfinite(iteration) else last
         kept.append(row)
     return kept
+
+
+def with_continuous_clock(rows: list[dict], column: str = "time_total_s") -> list[dict]:
+    """The rows (in training order, restores resolved) with a clock that ran back carried on:
+    a row whose `column` is below the row before it counts from that row's time (module
+    docstring), and so do the rows after it."""
+    carried, offset, last = [], 0.0, -math.inf
+    for row in rows:
+        seconds = number(row.get(column))
+        if math.isfinite(seconds):
+            if seconds + offset < last:
+                offset = last
+            if offset:
+                row = {**row, column: seconds + offset}
+            last = seconds + offset
+        carried.append(row)
+    return carried
 
 
 def number(value) -> float:

@@ -9,6 +9,7 @@ import json
 import pickle
 import re
 import shutil
+import subprocess
 from collections import OrderedDict
 from pathlib import Path
 
@@ -26,10 +27,11 @@ from rllib_pommer.rl.checkpoint_policy import (
     checkpoint_iteration,
     latest_checkpoint,
     load_checkpoint_net,
+    packed_commits,
 )
 from rllib_pommer.train import main
 from rllib_pommer.viz.model_card import TRAINING_DIR
-from rllib_pommer.viz.training import read_trial
+from rllib_pommer.viz.training import HISTORY_FILE, read_trial
 
 COLUMNS = ("training_iteration", "time_total_s", "env_runners/num_env_steps_sampled_lifetime",
            "env_runners/num_episodes_lifetime", "env_runners/module_episode_returns_mean/learner",
@@ -181,3 +183,37 @@ def test_the_committed_campaign_exports_to_its_checkpoint(tmp_path, committed_ca
     net = load_checkpoint_net(checkpoint)
     weights = torch.load(target / "pi.pt", weights_only=True)
     assert all(torch.equal(weights[k], v) for k, v in net.state_dict().items())
+
+
+def test_the_card_lists_the_packs_the_exported_rows_came_through(tmp_path):
+    """A run packed at iteration 2 (a row 3 logged after its checkpoint), trained on to a
+    collapse packed at 5, then set back to the first pack and trained again to 4: the policy
+    came through the first and last packs only."""
+    run = tmp_path / "campaign" / "run"
+    trial = run / "PPO_pommerman_team_00000"
+
+    def git(*args):
+        subprocess.run(["git", "-C", str(tmp_path), *args], check=True, capture_output=True)
+
+    def pack(checkpoint_at: int, steps: list[int], message: str) -> str:
+        shutil.rmtree(trial, ignore_errors=True)
+        (trial / "checkpoint_000001").mkdir(parents=True)
+        with (trial / "checkpoint_000001" / ALGORITHM_STATE).open("wb") as f:
+            pickle.dump({"training_iteration": checkpoint_at}, f)
+        with open(trial / HISTORY_FILE, "w", newline="") as f:
+            writer = csv.writer(f)
+            writer.writerow(["training_iteration", "env_runners/num_env_steps_sampled_lifetime"])
+            writer.writerows(enumerate(steps, start=1))
+        git("add", "-A")
+        git("-c", "user.name=t", "-c", "user.email=t@t", "commit", "-qm", message)
+        return subprocess.run(["git", "-C", str(tmp_path), "rev-parse", "--short", "HEAD"],
+                              capture_output=True, text=True, check=True).stdout.strip()
+
+    git("init", "-q")
+    first = pack(2, [100, 200, 300], "first pack")
+    pack(5, [100, 200, 301, 401, 501], "collapsed")
+    last = pack(4, [100, 200, 302, 402], "set back and trained again")
+    trial_now = read_trial(trial)
+    assert packed_commits(run, trial_now) == [last, first]
+    trial_now.rows = trial_now.rows[:2]  # exported at iteration 2: before the last pack
+    assert packed_commits(run, trial_now) == [first]

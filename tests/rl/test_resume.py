@@ -172,6 +172,16 @@ def test_a_packed_run_resumes_at_another_path(tmp_path, pi_weights):
     (trial,) = [p for p in first.iterdir() if p.is_dir() and p.name.startswith("PPO_")]
     *_, lower, higher = sorted(trial.glob("checkpoint_*"))
     newest_iteration = checkpoint_iteration(higher)
+    # An iteration logged after the checkpoint, as a stop can leave (the paper campaign at
+    # 6,175/6,176): the resume packs again, and must still find the checkpoint's result, or
+    # Tune restarts the clock.
+    (result_file,) = first.glob("*/result.json")
+    last_result = json.loads(result_file.read_text().splitlines()[-1])
+    assert last_result["training_iteration"] == newest_iteration
+    after_checkpoint = {**last_result, "training_iteration": newest_iteration + 1,
+                        "time_total_s": last_result["time_total_s"] + 1.0}
+    with open(result_file, "a") as f:
+        f.write(json.dumps(after_checkpoint) + "\n")
     higher.rename(trial / "swap")
     lower.rename(higher)
     (trial / "swap").rename(lower)  # the newest now has the lower number
@@ -182,7 +192,7 @@ def test_a_packed_run_resumes_at_another_path(tmp_path, pi_weights):
     assert [p.name for p in trial.glob("checkpoint_*")] == [lower.name]
     assert (trial / "history.csv").is_file() and not list(trial.glob("events.out.tfevents.*"))
     assert len((trial / "progress.csv").read_text().splitlines()) == 1  # the header, for Tune
-    before = read_rows(trial)
+    before = [r for r in read_rows(trial) if _iteration(r) <= newest_iteration]
     (state,) = first.glob("basic-variant-state-*.json")  # pack keeps the newest only
     intact = state.read_bytes()
     state.write_bytes(b"")  # as a kill mid-write can leave it: Tune would start over
@@ -224,6 +234,9 @@ def test_a_packed_run_resumes_at_another_path(tmp_path, pi_weights):
             == lifetime > 12)  # past the warm-up's 12 episodes: in the second stage
     assert resumed["curriculum/iteration_stage_name"] == last[
         "curriculum/iteration_stage_name"] == "static"
+    # Tune's own clock went on from the checkpoint's (not from 0), before any repair on reading.
+    restored = next(r for r in _results(moved) if r["iterations_since_restore"] == 1)
+    assert restored["time_total_s"] > float(last["time_total_s"]) > 0
     played = subprocess.run([sys.executable, "-m", "rllib_pommer.evaluate", "--team", str(moved),
                              "--vs", "static", "--games", "2", "--workers", "1"], cwd=tmp_path,
                             capture_output=True, text=True, timeout=300, env=elsewhere)

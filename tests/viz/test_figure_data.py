@@ -15,6 +15,7 @@ from rllib_pommer.viz.paper import PAPER_OPPONENTS, PAPER_TABLES, paper_table
 from rllib_pommer.viz.tables import training_table
 from rllib_pommer.viz.training import (
     TrainingCurve,
+    read_rows,
     rolling_mean,
     stage_figures,
     training_curve,
@@ -152,6 +153,23 @@ def test_a_restored_runs_rows_replace_the_discarded_ones(tmp_path):
     curve = training_curve(tmp_path, window=20)
     np.testing.assert_array_equal(curve.episodes, [10, 20, 30, 40])
     np.testing.assert_allclose(curve.returns, [0.0, 0.0, 0.5, 1.0])
+
+
+def test_a_clock_restarted_by_a_restore_is_carried_on(tmp_path):
+    """Tune restarts time_total_s at 0 when it restores a checkpoint registered without its
+    result; the iterations go on, so the rows count on from the time before the drop."""
+    def row(iteration, seconds):
+        return {"training_iteration": iteration, "time_total_s": seconds,
+                "curriculum": {"iteration_stage_name": "simple"},
+                "env_runners": {"num_episodes_lifetime": 10 * iteration,
+                                "episode_return_mean": 0.0}}
+
+    rows = [row(1, 5.0), row(2, 10.0), row(3, 4.0), row(4, 9.0), row(5, 3.0)]
+    (tmp_path / "result.json").write_text("".join(json.dumps(r) + "\n" for r in rows))
+    clock = [float(r["time_total_s"]) for r in read_rows(tmp_path)]
+    assert clock == [5.0, 10.0, 14.0, 19.0, 22.0]
+    (figures,) = stage_figures(tmp_path)
+    assert figures.seconds == 22.0
 
 
 def test_lines_cut_short_are_skipped_with_a_warning_naming_them(tmp_path):
