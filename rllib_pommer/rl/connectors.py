@@ -19,6 +19,7 @@ the episode-end metrics.
 from __future__ import annotations
 
 import numpy as np
+import torch
 from ray.rllib.connectors.connector_v2 import ConnectorV2
 from ray.rllib.core.columns import Columns
 
@@ -68,11 +69,6 @@ class EpisodeFilters:
         return executed
 
 
-def _log_softmax(logits: np.ndarray) -> np.ndarray:
-    shifted = logits - logits.max()
-    return shifted - np.log(np.exp(shifted).sum())
-
-
 class LearnerFilters(ConnectorV2):
     """Module-to-env piece: the learner's action through its episode's jitter correction and
     action filter (when on), with ACTION_LOGP recomputed for the executed action."""
@@ -96,7 +92,9 @@ class LearnerFilters(ConnectorV2):
             if executed == chosen:
                 continue
             actions[0] = executed
-            if Columns.ACTION_LOGP in batch:
-                logits = np.asarray(batch[Columns.ACTION_DIST_INPUTS][key][0], np.float64)
-                batch[Columns.ACTION_LOGP][key][0] = np.float32(_log_softmax(logits)[executed])
+            if Columns.ACTION_LOGP in batch:  # by the module's own distribution, as PPO's
+                # learner recomputes it: the ratio of an overridden row starts at exactly 1
+                logits = torch.as_tensor(batch[Columns.ACTION_DIST_INPUTS][key][0])
+                dist = rl_module[LEARNER].get_exploration_action_dist_cls().from_logits(logits)
+                batch[Columns.ACTION_LOGP][key][0] = dist.logp(torch.tensor(executed)).numpy()
         return batch

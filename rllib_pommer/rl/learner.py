@@ -21,7 +21,8 @@ this at 81,100 games (6,770 warnings until 100,000): from then its training win 
 SimpleAgent fell from 0.76 to 0.24 and pi's logit spread (largest minus smallest logit, median
 over the decisions of 16 games) grew from about 20 to 8,100, so that it never placed a bomb against
 StaticAgent. Each iteration logs how many updates it skipped (`nonfinite_updates_skipped`) and
-the largest batch-mean logit spread pi produced (`pi_logit_spread`), both kept in history.csv.
+the largest batch-mean logit spread pi produced (`pi_logit_spread`), and the extremes of PPO's
+log-ratio (`pi_log_ratio_max`, `pi_log_ratio_min`: `_log_pi_health`), all kept in history.csv.
 """
 
 from __future__ import annotations
@@ -57,11 +58,26 @@ class PommerPPOLearner(PPOTorchLearner):
 
     def compute_loss_for_module(self, *, module_id, config, batch, fwd_out):
         if module_id == LEARNER:
-            logits = fwd_out[Columns.ACTION_DIST_INPUTS].detach()
-            spread = (logits.max(-1).values - logits.min(-1).values).mean()
-            self.metrics.log_value((module_id, "pi_logit_spread"), spread.item(), reduce="max")
+            self._log_pi_health(batch, fwd_out[Columns.ACTION_DIST_INPUTS].detach())
         return super().compute_loss_for_module(module_id=module_id, config=config, batch=batch,
                                                fwd_out=fwd_out)
+
+    def _log_pi_health(self, batch, logits: torch.Tensor) -> None:
+        """Per iteration: the largest batch-mean logit spread, and the extremes of PPO's log-ratio
+        (log pi(a) now minus when sampled) over the rows it trains on: a log-ratio above 88
+        overflows PPO's float32 ratio to inf, whose backward is nan even where the clip or the
+        min leaves that row's gradient at zero (the suspected trigger of the collapse above)."""
+        spread = (logits.max(-1).values - logits.min(-1).values).mean()
+        self.metrics.log_value((LEARNER, "pi_logit_spread"), spread.item(), reduce="max")
+        dist = self.module[LEARNER].unwrapped().get_train_action_dist_cls().from_logits(logits)
+        log_ratio = dist.logp(batch[Columns.ACTIONS]) - batch[Columns.ACTION_LOGP]  # as PPO's
+        if Columns.LOSS_MASK in batch:
+            log_ratio = log_ratio[batch[Columns.LOSS_MASK].bool()]
+        if log_ratio.numel():
+            self.metrics.log_value((LEARNER, "pi_log_ratio_max"), log_ratio.max().item(),
+                                   reduce="max")
+            self.metrics.log_value((LEARNER, "pi_log_ratio_min"), log_ratio.min().item(),
+                                   reduce="min")
 
     def apply_gradients(self, gradients_dict) -> None:
         finite = all(grad is None or torch.isfinite(grad).all()

@@ -63,7 +63,8 @@ SUMMARY_COLUMNS = (
     "curriculum/pi_frozen", "env_runners/learner_win", "env_runners/learner_loss",
     "env_runners/learner_tie", "env_runners/learner_override_share",
     "env_runners/episode_len_mean", "learners/learner/vf_explained_var",
-    "learners/learner/pi_logit_spread", "learners/learner/nonfinite_updates_skipped")
+    "learners/learner/pi_logit_spread", "learners/learner/nonfinite_updates_skipped",
+    "learners/learner/pi_log_ratio_max", "learners/learner/pi_log_ratio_min")
 WINDOW = 1000
 RLLIB_WINDOW = 100  # RLlib's metrics_num_episodes_for_smoothing, which our config leaves as is
 

@@ -83,6 +83,11 @@ def test_stage_boundary_and_warmup_freeze(smoke):
         health = it["result"]["learners"][LEARNER]
         assert health["nonfinite_updates_skipped"] == 0
         assert 0 < health["pi_logit_spread"] < 1e3
+        ratio = health["pi_log_ratio_min"], health["pi_log_ratio_max"]
+        if it["stage"] == 0:  # pi frozen: the learner's log-probabilities are the sampler's
+            assert ratio == (0.0, 0.0)
+        else:  # the first minibatch meets pi as it sampled, then pi moves
+            assert ratio[0] <= 0.0 <= ratio[1] < 88 and ratio != (0.0, 0.0)
     shares = [it["result"]["env_runners"].get("learner_override_share", 0) for it in iterations]
     assert max(shares) > 0, "the filters never overrode an action"
 
