@@ -9,7 +9,12 @@ and lr 3e-4 ended with every training game tied); GAE lambda 0.95; 4 epochs over
 env steps (~3,500 learner rows; all four agents step, and the learner's rows are the ones
 trained); value loss coefficient 1 with RLlib's default value clip 10 (returns are within
 [-1, 1]); no KL penalty (the clip does the work); gradient norm clip 10; 8 envs per env runner
-(batched inference, rllib-notes I).
+(batched inference, rllib-notes I). More envs amortise RLlib's per-step connector and inference
+calls: against SimpleAgents, sampling alone ran 1.16x the env steps/s with 16, 1.47x with 32 and
+1.55x with 64, and whole iterations (4 epochs of learning included) 1.13x with 32 (medians of 4-5
+interleaved rounds in one process, both campaigns on the cores, 2026-12-03). The campaigns and
+their ablations keep 8 so that they stay comparable; a new run may set `num_envs_per_env_runner`
+in its [ppo] table (a short run, as `quick`, finishes fewer episodes per iteration with more).
 
 Layout (`train --num-env-runners N --torch-threads T`, not PPO's arithmetic): by default the
 algorithm's process samples and learns on one thread, so two runs share a 2-core machine, one per
