@@ -96,5 +96,6 @@ class LearnerFilters(ConnectorV2):
                 # learner recomputes it: the ratio of an overridden row starts at exactly 1
                 logits = torch.as_tensor(batch[Columns.ACTION_DIST_INPUTS][key][0])
                 dist = rl_module[LEARNER].get_exploration_action_dist_cls().from_logits(logits)
-                batch[Columns.ACTION_LOGP][key][0] = dist.logp(torch.tensor(executed)).numpy()
+                logp = dist.logp(torch.tensor(executed)).item()  # a float32's value
+                batch[Columns.ACTION_LOGP][key][0] = np.float32(logp)
         return batch
