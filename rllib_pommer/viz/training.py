@@ -8,8 +8,8 @@ because Tune's CSV appends a resumed run's rows in the new results' column order
 header when the set of keys changed, which scrambles the columns. A resumed trial repeats the
 iterations after its checkpoint: the rows of the restored run replace the ones it discarded. Its
 clock, `time_total_s`, restarts at 0 when Tune restored it from a checkpoint registered without
-its result (a pack repeated after the result.json line was cut, `rl.packing`): a clock that runs
-back while the iterations go on is carried on from the last time before it. A
+its result (a pack repeated after the result.json line was cut, `rl.packing`), so the rows are
+given one clock that adds up each iteration's own seconds (`with_continuous_clock`). A
 line that is not JSON (a write cut short: a live run mid-line, or a run killed mid-write and then
 resumed) is skipped with a warning naming the file and line. Columns used:
 
@@ -64,7 +64,7 @@ SUMMARY_COLUMNS = (
     "env_runners/learner_tie", "env_runners/learner_override_share",
     "env_runners/episode_len_mean", "learners/learner/vf_explained_var",
     "learners/learner/pi_logit_spread", "learners/learner/nonfinite_updates_skipped",
-    "learners/learner/pi_log_ratio_max", "learners/learner/pi_log_ratio_min")
+    "learners/learner/pi_log_ratio_max", "learners/learner/pi_log_ratio_min", "time_this_iter_s")
 WINDOW = 1000
 RLLIB_WINDOW = 100  # RLlib's metrics_num_episodes_for_smoothing, which our config leaves as is
 
@@ -203,19 +203,23 @@ def without_discarded(rows: list[dict]) -> list[dict]:
 
 
 def with_continuous_clock(rows: list[dict], column: str = "time_total_s") -> list[dict]:
-    """The rows (in training order, restores resolved) with a clock that ran back carried on:
-    a row whose `column` is below the row before it counts from that row's time (module
-    docstring), and so do the rows after it."""
-    carried, offset, last = [], 0.0, -math.inf
+    """The rows (in training order, restores resolved) with one clock (module docstring): the
+    first row's `column`, then each row adds its own seconds, `time_this_iter_s` where logged,
+    else the growth of `column` since the row before, or all of it where it ran back (a restore
+    that restarted it at 0). A row's `column` alone cannot say: a restarted clock may have run
+    for hours before a pack put its rows after the ones it had restarted under."""
+    carried, clock, last = [], math.nan, math.nan
     for row in rows:
-        seconds = number(row.get(column))
-        if math.isfinite(seconds):
-            if seconds + offset < last:
-                offset = last
-            if offset:
-                row = {**row, column: seconds + offset}
-            last = seconds + offset
-        carried.append(row)
+        total = number(row.get(column))
+        if not math.isfinite(total):
+            carried.append(row)
+            continue
+        own = number(row.get("time_this_iter_s"))
+        if not math.isfinite(own):
+            own = total - last if total >= last else total
+        clock = total if math.isnan(clock) else clock + own
+        last = total
+        carried.append(row if clock == total else {**row, column: clock})
     return carried
 
 

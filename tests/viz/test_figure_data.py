@@ -172,6 +172,22 @@ def test_a_clock_restarted_by_a_restore_is_carried_on(tmp_path):
     assert figures.seconds == 22.0
 
 
+def test_a_packed_clock_adds_each_iterations_own_seconds(tmp_path):
+    """A pack keeps result.json's lines from its checkpoint on beside history.csv: their clock
+    restarted long before (raw 20 s at iteration 3, where the history had carried it to 120 s),
+    so only each iteration's own seconds may be added to the history's clock."""
+    with open(tmp_path / "history.csv", "w") as f:
+        f.write("training_iteration,time_total_s,env_runners/num_episodes_lifetime,"
+                "env_runners/module_episode_returns_mean/learner\n"
+                "1,100.0,10,0.0\n2,110.0,20,0.0\n3,120.0,30,0.0\n")
+    results = [{"training_iteration": k, "time_total_s": raw, "time_this_iter_s": 10.0,
+                "env_runners": {"num_episodes_lifetime": 10 * k, "episode_return_mean": 0.0}}
+               for k, raw in ((3, 20.0), (4, 30.0))]
+    (tmp_path / "result.json").write_text("".join(json.dumps(r) + "\n" for r in results))
+    clock = [float(r["time_total_s"]) for r in read_rows(tmp_path)]
+    assert clock == [100.0, 110.0, 120.0, 130.0]
+
+
 def test_lines_cut_short_are_skipped_with_a_warning_naming_them(tmp_path):
     def line(ret):
         return json.dumps({"env_runners": {"episode_return_mean": ret, "num_episodes": 10}})
