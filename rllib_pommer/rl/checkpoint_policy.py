@@ -23,6 +23,7 @@ import pickle
 import pickletools
 import re
 import subprocess
+import typing
 from functools import cache
 from pathlib import Path
 
@@ -91,14 +92,19 @@ class StateUnpickler(pickle.Unpickler):
 def read_module_state(state_file: Path) -> dict:
     """The saved state of an RLlib module (or of the algorithm: `algorithm_state.pkl`), or a
     ValueError naming the file and the problem."""
+    with state_file.open("rb") as f:
+        return _load_state(f, state_file)
+
+
+def _load_state(stream: typing.BinaryIO, name: object) -> dict:
+    """A pickled state dict read by `StateUnpickler`, or a ValueError naming `name`."""
     try:
-        with state_file.open("rb") as f:
-            state = StateUnpickler(f).load()
+        state = StateUnpickler(stream).load()
     except (pickle.UnpicklingError, EOFError, ValueError, TypeError, AttributeError,
             IndexError) as exc:
-        raise ValueError(f"{state_file}: not a readable module state ({exc})") from None
+        raise ValueError(f"{name}: not a readable module state ({exc})") from None
     if not isinstance(state, dict):
-        raise ValueError(f"{state_file}: not a readable module state (a "
+        raise ValueError(f"{name}: not a readable module state (a "
                          f"{type(state).__name__}, not a dict)")
     return state
 
@@ -228,9 +234,8 @@ def _packed_iteration(run: Path, commit: str, trial_name: str) -> int | None:
     blob = subprocess.run(["git", "-C", str(run), "show", f"{commit}:./{state}"],
                           capture_output=True).stdout
     try:
-        iteration = StateUnpickler(io.BytesIO(blob)).load().get("training_iteration")
-    except (pickle.UnpicklingError, EOFError, ValueError, TypeError, AttributeError,
-            IndexError):
+        iteration = _load_state(io.BytesIO(blob), f"{commit}:{state}").get("training_iteration")
+    except ValueError:
         return None
     return iteration if isinstance(iteration, int) else None
 

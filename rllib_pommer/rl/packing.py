@@ -95,15 +95,12 @@ def pack_run(out: Path) -> dict:
     newest_of, to_register = {}, {}
     for trial in trial_dirs(out):
         checkpoints = sorted(trial.glob("checkpoint_*"), key=checkpoint_age)
-        iteration = checkpoint_iteration(checkpoints[-1]) if checkpoints else None
         summary = read_trial(trial)
         write_summary(summary, trial, HISTORY_FILE)
         results = trial / "result.json"
         rows = _results(results)
-        if rows:  # Tune reads the last; a pack repeated later finds the checkpoint's too
-            kept = [line for line, result in rows
-                    if iteration is None or result.get("training_iteration", 0) >= iteration]
-            results.write_text("".join(f"{line}\n" for line in kept or [rows[-1][0]]))
+        if rows:  # Tune reads the last result when it restores the trial
+            results.write_text(f"{rows[-1][0]}\n")
         _keep_header(trial / "progress.csv")
         for stale in [*checkpoints[:-1], *trial.glob("events.out.tfevents.*")]:
             if stale.is_dir():
@@ -112,7 +109,8 @@ def pack_run(out: Path) -> dict:
                 stale.unlink()
         newest_of[trial.name] = checkpoints[-1] if checkpoints else None
         if checkpoints:
-            to_register[trial.name] = (checkpoints[-1], _result_at(rows, summary, iteration))
+            to_register[trial.name] = (checkpoints[-1], _result_at(
+                rows, summary, checkpoint_iteration(checkpoints[-1])))
     registered = tune_state.register_only(out, to_register)
     for pattern in STATE_PATTERNS:
         for stale in sorted(out.glob(pattern))[:-1]:  # one per start; Tune reads the newest
@@ -146,11 +144,12 @@ def _results(path: Path) -> list[tuple[str, dict]]:
 
 def _result_at(rows: list[tuple[str, dict]], summary: Trial, iteration: int) -> dict:
     """The result of `iteration` (the newest such line of result.json), as Tune records beside a
-    checkpoint, its clock taken from the trial's summary rows (carried on over any restore that
-    lost it, viz/training.py). If no line survived (a run killed before Tune copied its result
-    files to the run folder), the iteration and its clock alone: Tune's trainable restores its
-    iteration counter and clock from these metrics, and from {} would number the resumed
-    iterations from 1 again (and the history, reading that as a restore, drop every row)."""
+    checkpoint, its clock taken from the trial's summary rows (one clock over every restore,
+    viz/training.py). If no line survived (a pack repeated after the first cut result.json to
+    a later iteration's line, or a run killed before Tune copied its result files to the run
+    folder), the iteration and its clock alone: Tune's trainable restores its iteration counter
+    and clock from these metrics; from {} it would number the resumed iterations from 1 again
+    (and the history, reading that as a restore, drop every row) and restart the clock at 0."""
     result = next((r for _, r in reversed(rows) if r.get("training_iteration") == iteration),
                   {"training_iteration": iteration})
     clock = next((number(row.get("time_total_s")) for row in reversed(summary.rows)

@@ -202,15 +202,15 @@ def without_discarded(rows: list[dict]) -> list[dict]:
     return kept
 
 
-def with_continuous_clock(rows: list[dict], column: str = "time_total_s") -> list[dict]:
+def with_continuous_clock(rows: list[dict]) -> list[dict]:
     """The rows (in training order, restores resolved) with one clock (module docstring): the
-    first row's `column`, then each row adds its own seconds, `time_this_iter_s` where logged,
-    else the growth of `column` since the row before, or all of it where it ran back (a restore
-    that restarted it at 0). A row's `column` alone cannot say: a restarted clock may have run
-    for hours before a pack put its rows after the ones it had restarted under."""
+    first row's `time_total_s`, then each row adds its own seconds, `time_this_iter_s` where
+    logged, else the growth of `time_total_s` since the row before, or all of it where it ran back
+    (a restore that restarted it at 0). A row's total alone cannot say: a restarted clock may
+    have run for hours before a pack put its rows after the ones it had restarted under."""
     carried, clock, last = [], math.nan, math.nan
     for row in rows:
-        total = number(row.get(column))
+        total = number(row.get("time_total_s"))
         if not math.isfinite(total):
             carried.append(row)
             continue
@@ -219,7 +219,7 @@ def with_continuous_clock(rows: list[dict], column: str = "time_total_s") -> lis
             own = total - last if total >= last else total
         clock = total if math.isnan(clock) else clock + own
         last = total
-        carried.append(row if clock == total else {**row, column: clock})
+        carried.append(row if clock == total else {**row, "time_total_s": clock})
     return carried
 
 
