@@ -29,7 +29,7 @@ from pathlib import Path
 
 import torch
 
-from ..agents.registry import PolicySpec, register_kind
+from ..agents.registry import PolicySpec, policy_names, register_kind, resolve_policy
 from ..imitation.learned import LearnedAgent, LearnedPolicy
 from ..imitation.network import PommerNet
 from ..viz.training import HISTORY_FILE, Trial, number, read_trial, write_summary
@@ -240,6 +240,28 @@ def _packed_iteration(run: Path, commit: str, trial_name: str) -> int | None:
     return iteration if isinstance(iteration, int) else None
 
 
+def starting_policy(run: Path, curriculum: Curriculum, exclude: str = "") -> str | None:
+    """The shipped learned policy pi started from, proven by equal weights: where the first stage
+    froze pi, the checkpoint kept at its end (`<run>/stages/1-<name>`) holds pi as the run began.
+    The weights file a run was started from may have been replaced since (`imitation` was
+    retrained after the paper run started from it), so its path proves nothing. None when the
+    first stage trained pi, its checkpoint is missing, or no policy but `exclude` matches."""
+    first = curriculum.stages[0]
+    stage_end = run / "stages" / f"1-{first.name}"
+    if not first.freeze_pi or not (stage_end / MODULE_STATE).is_file():
+        return None
+    start = load_checkpoint_net(stage_end).state_dict()
+    for name in policy_names():
+        spec = resolve_policy(name)
+        if name == exclude or spec.kind != "learned":
+            continue
+        weights = torch.load(spec.path.parent / spec.params["weights"], weights_only=True)
+        if weights.keys() == start.keys() and all(torch.equal(weights[key], start[key])
+                                                  for key in start):
+            return name
+    return None
+
+
 def _source(policy: str, checkpoint: Path, trial: Trial, iteration: int,
             curriculum: Curriculum) -> dict:
     """What `viz/model_card.py` says of where a policy came from."""
@@ -251,6 +273,7 @@ def _source(policy: str, checkpoint: Path, trial: Trial, iteration: int,
                        "stages": [dataclasses.asdict(stage) for stage in curriculum.stages]},
         "exported_at_commit": _git(run, "rev-parse", "--short", "HEAD") or "unknown",
         "run_commits": packed_commits(run, trial),
+        "pi_start": starting_policy(run, curriculum, exclude=policy),
     }
 
 

@@ -67,6 +67,17 @@ def _schedule(curriculum: dict) -> str:
     return "\n".join(lines)
 
 
+def _start_line(source: dict) -> list[str]:
+    """Where pi began, as `checkpoint_policy.starting_policy` proved it (sources written before
+    it existed say nothing)."""
+    if "pi_start" not in source:
+        return []
+    if source["pi_start"] is None:
+        return ["- pi started from weights that no shipped policy holds now"]
+    return [f"- pi started from `{source['pi_start']}` (its `pi.pt` equals pi at the end of the "
+            f"run's pi-frozen first stage)"]
+
+
 def _preface(policy_dir: Path, source: dict) -> list[str]:
     row = _last_row(policy_dir)
     curriculum = source["curriculum"]
@@ -89,12 +100,14 @@ def _preface(policy_dir: Path, source: dict) -> list[str]:
         f"did in training; the variants `{source['policy']}_jitter`, `_action` and "
         f"`_jitter_action` add the paper's filters.",
         "## Training",
-        f"- games: {games:,}; env steps: {steps:,}; training time: {hours:.1f} hours (the run's "
-        f"`time_total_s`: its iterations, sessions added up)\n"
-        f"- code: exported at commit `{source['exported_at_commit']}`; the run was packed and "
-        f"committed {len(commits)} time(s) ({', '.join(f'`{c}`' for c in commits) or 'never'}), "
-        f"each session training with the code of the commit before its pack\n"
-        f"- curriculum `{curriculum['name']}`:",
+        "\n".join([
+            f"- games: {games:,}; env steps: {steps:,}; training time: {hours:.1f} hours (the "
+            f"run's `time_total_s`: its iterations, sessions added up)",
+            *_start_line(source),
+            f"- code: exported at commit `{source['exported_at_commit']}`; the run was packed and "
+            f"committed {len(commits)} time(s) ({', '.join(f'`{c}`' for c in commits) or 'never'}"
+            f"), each session training with the code of the commit before its pack",
+            f"- curriculum `{curriculum['name']}`:"]),
         _schedule(curriculum),
     ]
 

@@ -33,6 +33,7 @@ from rllib_pommer.train import main
 from rllib_pommer.viz.model_card import TRAINING_DIR
 from rllib_pommer.viz.training import HISTORY_FILE, read_trial
 
+REPO = Path(__file__).resolve().parents[2]
 COLUMNS = ("training_iteration", "time_total_s", "env_runners/num_env_steps_sampled_lifetime",
            "env_runners/num_episodes_lifetime", "env_runners/module_episode_returns_mean/learner",
            "curriculum/iteration_stage_name", "curriculum/iteration_reward")
@@ -128,6 +129,24 @@ def test_report_card_adds_the_results_and_keeps_notes(tmp_path, capsys):
     assert "record files only" in capsys.readouterr().err
 
 
+def test_the_card_names_the_shipped_policy_pi_started_from(tmp_path):
+    """pi at the end of the frozen warm-up is pi as the run began: the shipped policy with those
+    weights is named, and a start that matches none is said to."""
+    imitation_v2 = PommerNet()
+    imitation_v2.load_state_dict(torch.load(REPO / "policies/imitation_v2/pi.pt",
+                                            weights_only=True))
+    for run, start, expected in (("from_v2", imitation_v2, "imitation_v2"),
+                                 ("from_elsewhere", PommerNet(), None)):
+        trial = _fake_run(tmp_path / run, start)
+        shutil.copytree(trial / "checkpoint_000002", tmp_path / run / "stages" / "1-warmup")
+        target = tmp_path / f"{run}_policy"
+        assert main(["--out", str(tmp_path / run), "--export", str(target)]) == 0
+        assert json.loads((target / "source.json").read_text())["pi_start"] == expected
+        card = (target / "MODEL_CARD.md").read_text()
+        assert ("pi started from `imitation_v2`" in card) == (expected is not None)
+        assert ("no shipped policy holds now" in card) == (expected is None)
+
+
 def test_export_names_what_is_missing(tmp_path, capsys):
     trial = _fake_run(tmp_path / "run", PommerNet())
     (trial / "params.json").write_text("{}")
@@ -178,6 +197,7 @@ def test_the_committed_campaign_exports_to_its_checkpoint(tmp_path, committed_ca
     card = (target / "MODEL_CARD.md").read_text()
     assert re.search(rf"{games:,} of 100,000 games", card)
     assert f"iteration {iteration:,}" in card
+    assert "pi started from `imitation_v2`" in card  # the soft-target clone, before DAgger
     kept = read_trial(target / TRAINING_DIR / "paper").rows
     assert int(float(kept[-1]["training_iteration"])) == iteration
     net = load_checkpoint_net(checkpoint)
