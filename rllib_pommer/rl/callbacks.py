@@ -22,9 +22,9 @@ The iteration that ends a stage asks Tune for a checkpoint (`should_checkpoint`)
 stage (`curriculum/ended_stage`), so the state at every stage's end is saved (training.py keeps
 it apart from Tune's rotation).
 
-Per episode the learner's true outcome (win/loss/tie of its team), its return under the stage's
-reward mode and the share of its actions the filters overrode are logged; they appear under
-`env_runners/` in the results.
+Per episode the learner's true outcome (win/loss/tie of its team; in a league stage, also per
+opponent: `learner_win_vs_<policy>`), its return under the stage's reward mode and the share of
+its actions the filters overrode are logged; they appear under `env_runners/` in the results.
 """
 
 from __future__ import annotations
@@ -48,15 +48,17 @@ def _push_stage(env_runner, mapping: SeatMapping, env_settings: dict) -> None:
             env.unwrapped.set_stage(**env_settings)
 
 
-def _learner_outcome(chunks) -> tuple[str, float] | None:
-    """("win"|"loss"|"tie" of the learner's team, the learner's return) from an episode's
-    chunks, or None. The return is per learner agent, averaged where the learner is its own
-    teammate.
+def _learner_outcome(chunks) -> tuple[str, float, str] | None:
+    """("win"|"loss"|"tie" of the learner's team, the learner's return, the opponents' module)
+    from an episode's chunks, or None. The return is per learner agent, averaged where the
+    learner is its own teammate.
 
     An agent that died in an earlier chunk is absent from the later ones, so all are searched."""
     returns: dict = {}
+    modules: dict = {}
     for chunk in chunks:
         for agent in chunk.agent_episodes.values():
+            modules[agent.agent_id] = agent.module_id
             if agent.module_id == LEARNER:
                 returns[agent.agent_id] = returns.get(agent.agent_id, 0.0) + agent.get_return()
     finals = [e.get_infos(-1) for e in chunks[-1].agent_episodes.values()]
@@ -65,7 +67,8 @@ def _learner_outcome(chunks) -> tuple[str, float] | None:
         return None
     seat = next(iter(returns))
     result = "tie" if not winners else "win" if seat in winners else "loss"
-    return result, sum(returns.values()) / len(returns)
+    opponent = next(module for agent, module in modules.items() if agent % 2 != seat % 2)
+    return result, sum(returns.values()) / len(returns), opponent
 
 
 class CurriculumCallback(RLlibCallback):
@@ -128,14 +131,19 @@ class CurriculumCallback(RLlibCallback):
             "ended_stage": f"{before + 1}-{ended}" if ended else None,
         }
 
-    def on_episode_end(self, *, episode, prev_episode_chunks=None, metrics_logger=None,
-                       **kwargs) -> None:
+    def on_episode_end(self, *, episode, prev_episode_chunks=None, env_runner=None,
+                       metrics_logger=None, **kwargs) -> None:
         outcome = _learner_outcome([*(prev_episode_chunks or []), episode])
         if outcome is None or metrics_logger is None:
             return
-        result, learner_return = outcome
+        result, learner_return, opponent = outcome
+        mapping = env_runner.config.policy_mapping_fn if env_runner is not None else None
+        league = isinstance(getattr(mapping, "opponent", None), tuple)
         for name in ("win", "loss", "tie"):
             metrics_logger.log_value(f"learner_{name}", float(result == name), window=100)
+            if league:  # and against each opponent of the league
+                metrics_logger.log_value(f"learner_{name}_vs_{opponent}", float(result == name),
+                                         window=100)
         metrics_logger.log_value("learner_return", learner_return, window=100)
         filters = list(episode.custom_data.get(FILTERS_KEY, {}).values())
         steps = sum(f.steps for f in filters)

@@ -20,9 +20,10 @@ A stage lasts `episodes` lifetime episodes (counted over all env runners). Polic
 `policies/` whose kind has a fixed RLlib module (`agents/registry.KINDS`: scripted kinds, or frozen
 learned / RLlib-checkpoint policies); a teammate may also be `"learner"`, the trained policy
 itself, so both seats of its team learn as one policy (the paper's recipe keeps a SuicideTeammate
-beside a lone learner). Every error names the file, the key and the valid choices,
-so a typo fails before Ray starts: this module imports neither Ray nor torch
-(tests/test_layering.py checks a whole load in a fresh interpreter).
+beside a lone learner), and an opponent a list of policies, a league that takes turns by
+episodes (`opponent = ["simple", "static", "ppo_cautious"]`; rl/mapping.py says how). Every error
+names the file, the key and the valid choices, so a typo fails before Ray starts: this module
+imports neither Ray nor torch (tests/test_layering.py checks a whole load in a fresh interpreter).
 """
 
 from __future__ import annotations
@@ -51,15 +52,20 @@ TOP_KEYS = ("name", "description", "pi_weights", "max_steps", "ppo", "defaults",
 @dataclass(frozen=True)
 class Stage:
     """One phase of a curriculum: who plays, for how many episodes, with which reward and
-    filters, and whether pi is frozen."""
+    filters, and whether pi is frozen. `opponent` is a policy name, or a league of them that
+    take turns (rl/mapping.py)."""
     name: str
-    opponent: str
+    opponent: str | tuple[str, ...]
     episodes: int
     teammate: str = "suicide"
     reward: str = "shaped"
     action_filter: float = 0.3
     jitter: float = 0.1
     freeze_pi: bool = False
+
+    @property
+    def opponents(self) -> tuple[str, ...]:
+        return (self.opponent,) if isinstance(self.opponent, str) else self.opponent
 
 
 STAGE_KEYS = tuple(f.name for f in fields(Stage))
@@ -101,7 +107,7 @@ class Curriculum:
         "learner" teammate is the trained module)."""
         names: list[str] = []
         for stage in self.stages:
-            for name in (stage.teammate, stage.opponent):
+            for name in (stage.teammate, *stage.opponents):
                 if name not in names and name != LEARNER:
                     names.append(name)
         return names
@@ -168,22 +174,34 @@ def _check_policy(where: str, name: Any) -> None:
                          f"filter suffixes, of kinds {fixed}")
 
 
+def _opponent(where: str, value: Any) -> str | tuple[str, ...]:
+    """A stage's opponent: one policy name, or a list of distinct ones (a league, kept as a
+    tuple; a list of one is that name)."""
+    names = value if isinstance(value, list) else [value]
+    if not names or not all(isinstance(name, str) for name in names) \
+            or len(set(names)) != len(names):
+        raise ValueError(f"{where}: opponent must be a policy name or a list of distinct policy "
+                         f"names, got {value!r}")
+    for name in names:
+        _check_policy(f"{where} key 'opponent'", name)
+    return names[0] if len(names) == 1 else tuple(names)
+
+
 def _stage(where: str, table: dict) -> Stage:
     _check_keys(where, table, STAGE_KEYS)
     for key in ("name", "opponent", "episodes"):
         if key not in table:
             raise ValueError(f"{where}: missing key {key!r}")
     for key, kind in typing.get_type_hints(Stage).items():
-        if key in table:
+        if key in table and key != "opponent":
             _check_type(where, key, table[key], kind, positive=key == "episodes")
-    stage = Stage(**table)
+    stage = Stage(**{**table, "opponent": _opponent(where, table["opponent"])})
     if stage.reward not in REWARD_MODES:
         raise ValueError(f"{where}: reward {stage.reward!r} is not one of {list(REWARD_MODES)}")
     for key in ("action_filter", "jitter"):
         value = getattr(stage, key)
         if not isinstance(value, (int, float)) or not 0 <= value <= 1:
             raise ValueError(f"{where}: {key} must be a probability in [0, 1], got {value!r}")
-    _check_policy(f"{where} key 'opponent'", stage.opponent)
     if stage.teammate != LEARNER:
         _check_policy(f"{where} key 'teammate' (a policy, or {LEARNER!r}: the trained one)",
                       stage.teammate)

@@ -61,7 +61,9 @@ def _schedule(curriculum: dict) -> str:
     lines = ["| stage | games | opponents | teammate | reward | action filter | jitter "
              "correction | pi |", "|---" * 8 + "|"]
     for s in curriculum["stages"]:
-        lines.append(f"| {s['name']} | {s['episodes']:,} | `{s['opponent']}` | `{s['teammate']}` "
+        league = [s["opponent"]] if isinstance(s["opponent"], str) else s["opponent"]
+        opponents = ", ".join(f"`{name}`" for name in league)
+        lines.append(f"| {s['name']} | {s['episodes']:,} | {opponents} | `{s['teammate']}` "
                      f"| {s['reward']} | {s['action_filter']:.0%} of games | {s['jitter']:.0%} of "
                      f"games | {'frozen' if s['freeze_pi'] else 'trained'} |")
     return "\n".join(lines)

@@ -35,7 +35,7 @@ def _write(tmp_path, text):
     ("[ppo]\nlearning_rate = 1\n" + STAGE, ["[ppo]", "learning_rate", "lr"]),
     (STAGE.replace('"static"', '"simple_action"'), ["simple_action", "filter"]),
     (STAGE + "freeze_pi = \"no\"\n", ["freeze_pi must be true or false, got 'no'"]),
-    (STAGE.replace('"static"', "5"), ["opponent must be a string, got 5"]),
+    (STAGE.replace('"static"', "5"), ["opponent must be a policy name or a list", "got 5"]),
     ("[ppo]\ntrain_batch_size = \"big\"\n" + STAGE,
      ["train_batch_size must be a positive integer, got 'big'"]),
     ("[ppo]\ngamma = 1.5\n" + STAGE, ["gamma must be in (0, 1]"]),

@@ -41,6 +41,12 @@ def test_variants_share_the_value_warmup():
         assert load_curriculum(name).total_episodes == 100_000
 
 
+def test_the_ablations_start_where_the_paper_run_did():
+    paper = load_curriculum("paper").pi_weights
+    assert paper == (REPO_ROOT / "policies/imitation_v2/pi.pt").resolve()
+    assert {load_curriculum(name).pi_weights for name in ("no_shaping", "no_curriculum")} == {paper}
+
+
 def test_a_file_anywhere_starts_from_the_shipped_weights_unless_it_names_its_own(tmp_path):
     stage = '[[stage]]\nname = "a"\nopponent = "static"\nepisodes = 5\n'
     (tmp_path / "mine.toml").write_text(stage)
