@@ -43,7 +43,7 @@ def default_opponents(team_name: str) -> list[str]:
     return [row for row in rows if row not in missing]
 
 
-def main() -> int:
+def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--team", required=True)
@@ -52,7 +52,7 @@ def main() -> int:
     parser.add_argument("--opponents", nargs="+", help="default: the paper's rows for the team")
     parser.add_argument("--out", type=Path, required=True)
     parser.add_argument("--workers", type=int, default=None, help="processes (default: cores)")
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
     team_name = Path(args.team).stem
     for vs in args.opponents or default_opponents(team_name):
