@@ -70,12 +70,9 @@ def _schedule(curriculum: dict) -> str:
 
 
 def _start_line(source: dict) -> list[str]:
-    """Where pi began, as `checkpoint_policy.starting_policy` proved it (sources written before
-    it existed say nothing)."""
-    if "pi_start" not in source:
+    """Where pi began, where `checkpoint_policy.starting_policy` could prove it."""
+    if not source.get("pi_start"):
         return []
-    if source["pi_start"] is None:
-        return ["- pi started from weights that no shipped policy holds now"]
     return [f"- pi started from `{source['pi_start']}` (its `pi.pt` equals pi at the end of the "
             f"run's pi-frozen first stage)"]
 
