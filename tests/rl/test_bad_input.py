@@ -153,7 +153,8 @@ def test_a_run_still_training_is_not_packed(tmp_path):
 
 
 def _no_ray(monkeypatch):
-    """Ray never starts: a start is noted in the returned list and fails (train exits 1)."""
+    """Ray never starts: a start is noted in the returned list and fails (train exits 1). The
+    job's shutdown after a failed start is kept off the Ray the other RL tests share."""
     import ray
 
     started = []
@@ -163,6 +164,7 @@ def _no_ray(monkeypatch):
         raise RuntimeError("not in this test")
 
     monkeypatch.setattr(ray, "init", note)
+    monkeypatch.setattr(ray, "shutdown", lambda: None)
     return started
 
 
@@ -215,6 +217,7 @@ def test_a_ray_that_does_not_start_is_one_line_with_what_to_check(tmp_path, monk
                            "  File ... (a long traceback)")
 
     monkeypatch.setattr(ray, "init", time_out)
+    monkeypatch.setattr(ray, "shutdown", lambda: None)  # as in _no_ray
     assert main(["--curriculum", "smoke", "--out", str(tmp_path / "run"),
                  "--pi-weights", str(pi_weights)]) == 1
     err = capsys.readouterr().err
