@@ -33,7 +33,8 @@ def test_names_resolve_from_any_directory_and_paths_from_the_working_one(tmp_pat
     monkeypatch.chdir(tmp_path)  # far from the repository
     assert resolve_policy("simple_action").path == REPO / "policies" / "simple.toml"
     assert find_curriculum("smoke") == REPO / "curriculum" / "smoke.toml"
-    assert load_curriculum("paper").pi_weights == REPO / "policies" / "imitation" / "pi.pt"
+    assert load_curriculum("quick").pi_weights == REPO / "policies" / "imitation" / "pi.pt"
+    assert load_curriculum("paper").pi_weights == REPO / "policies" / "imitation_v2" / "pi.pt"
     (tmp_path / "mine.toml").write_text(
         '[[stage]]\nname = "a"\nopponent = "static"\nepisodes = 5\n')
     (tmp_path / "policies").mkdir()
