@@ -96,11 +96,15 @@ def _shared_policy(weights: Path, greedy: bool) -> LearnedPolicy:
     return LearnedPolicy(load_policy_net(weights), greedy)
 
 
-def _learned_agent(spec: PolicySpec) -> LearnedAgent:
+def weights_file(spec: PolicySpec) -> Path:
+    """The weights file a policy file of kind "learned" names (relative to that file)."""
     if "weights" not in spec.params:
         raise ValueError(f"{spec.path}: a learned policy needs a 'weights' key")
-    weights = (spec.path.parent / spec.params["weights"]).resolve()
-    return LearnedAgent(_shared_policy(weights, bool(spec.params.get("greedy", False))))
+    return (spec.path.parent / spec.params["weights"]).resolve()
+
+
+def _learned_agent(spec: PolicySpec) -> LearnedAgent:
+    return LearnedAgent(_shared_policy(weights_file(spec), bool(spec.params.get("greedy", False))))
 
 
 register_kind("learned", _learned_agent)
@@ -114,6 +118,5 @@ def greedy_actor(name_or_path: str) -> tuple[Callable[[Observation], np.ndarray]
     if not isinstance(agent, LearnedAgent) or spec.filters:
         raise ValueError(f"policy {name_or_path!r} is not a plain learned policy "
                          f"(kind {spec.kind!r}, filters {list(spec.filters)})")
-    weights = (spec.path.parent / spec.params["weights"] if spec.kind == "learned"
-               else Path(spec.params["checkpoint"]))
+    weights = weights_file(spec) if spec.kind == "learned" else Path(spec.params["checkpoint"])
     return (lambda obs: agent.policy.probabilities(obs).argmax(-1)), weights.resolve()

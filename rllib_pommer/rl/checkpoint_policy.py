@@ -30,7 +30,7 @@ from pathlib import Path
 import torch
 
 from ..agents.registry import PolicySpec, policy_names, register_kind, resolve_policy
-from ..imitation.learned import LearnedAgent, LearnedPolicy
+from ..imitation.learned import LearnedAgent, LearnedPolicy, load_policy_net, weights_file
 from ..imitation.network import PommerNet
 from ..viz.training import HISTORY_FILE, Trial, number, read_trial, write_summary
 from .curriculum import Curriculum, load_curriculum
@@ -255,9 +255,8 @@ def starting_policy(run: Path, curriculum: Curriculum, exclude: str = "") -> str
         spec = resolve_policy(name)
         if name == exclude or spec.kind != "learned":
             continue
-        weights = torch.load(spec.path.parent / spec.params["weights"], weights_only=True)
-        if weights.keys() == start.keys() and all(torch.equal(weights[key], start[key])
-                                                  for key in start):
+        weights = load_policy_net(weights_file(spec)).state_dict()  # both PommerNets: same keys
+        if all(torch.equal(weights[key], value) for key, value in start.items()):
             return name
     return None
 
