@@ -1,15 +1,23 @@
 """How far pi's log-probabilities move under bfloat16 autocast, against float32, per policy:
 
-    python benchmarks/logit_precision.py policies/ppo_cautious/pi.pt campaign/team
+    python benchmarks/logit_precision.py policies/ppo_cautious/pi.pt campaign/paper
 
 Observations: 4 seeded games of the team env with random actions (410 observations). For each
-weights file (`pi.pt`) or run / checkpoint folder: pi's logit spread, and |logp bf16 - logp fp32|
-over all actions and over those below log-probability -10, the rare actions a filter override
-puts into PPO's batch (whose ratio the clip of 0.01 is meant to bound). Not part of CI.
+weights file (`pi.pt`) or run / checkpoint folder, over all actions and over those below
+log-probability -10 (the rare actions a filter override puts into PPO's batch, whose ratio the
+clip of 0.01 is meant to bound):
+- `|logp bf16 - fp32|`: the rounding error of bfloat16 itself;
+- `one step`: |logp after - logp before| when every weight moves by 1e-4 (the size of an Adam
+  step at lr 1e-4, signs drawn with seed 0), computed in float32 and in bfloat16: the log-ratio
+  one update gives PPO, real change plus, in bfloat16, the rounding that the step flips;
+- the largest |logp| difference between float32 batches of 1 to 128 rows and all rows at once
+  (the env runners' batches against the learner's).
+Not part of CI; figures in rl/rl_module.py.
 """
 
 from __future__ import annotations
 
+import copy
 import sys
 
 import numpy as np
@@ -20,6 +28,7 @@ from rllib_pommer.rl.checkpoint_policy import load_checkpoint_net
 from rllib_pommer.rl.env import PommeEnv
 
 RARE_LOGP = -10.0
+ADAM_STEP = 1e-4
 
 
 def observations(games: int = 4, steps: int = 300) -> torch.Tensor:
@@ -36,25 +45,56 @@ def observations(games: int = 4, steps: int = 300) -> torch.Tensor:
     return torch.as_tensor(np.stack(planes)).contiguous(memory_format=torch.channels_last)
 
 
+def log_probs(net: torch.nn.Module, x: torch.Tensor, bf16: bool) -> torch.Tensor:
+    with torch.no_grad(), torch.autocast("cpu", dtype=torch.bfloat16, enabled=bf16):
+        return torch.log_softmax(net(x).float(), -1)
+
+
+def stepped(net: torch.nn.Module) -> torch.nn.Module:
+    """`net` with every weight moved by +-ADAM_STEP."""
+    moved, generator = copy.deepcopy(net), torch.Generator().manual_seed(0)
+    with torch.no_grad():
+        for parameter in moved.parameters():
+            parameter.add_(ADAM_STEP * torch.randn(parameter.shape, generator=generator).sign())
+    return moved
+
+
+def batch_size_error(net: torch.nn.Module, x: torch.Tensor) -> float:
+    whole = log_probs(net, x, bf16=False)
+    return max((torch.cat([log_probs(net, x[i:i + size], bf16=False)
+                           for i in range(0, len(x), size)]) - whole).abs().max().item()
+               for size in (1, 2, 3, 8, 33, 128))
+
+
+def summary(error: torch.Tensor, rare: torch.Tensor) -> str:
+    text = f"median {error.median():.4f}, p99 {error.quantile(0.99):.3f}"
+    if rare.any():
+        text += (f"; rare: median {error[rare].median():.4f}, p99 "
+                 f"{error[rare].quantile(0.99):.3f}, max {error[rare].max():.3f}")
+    return text
+
+
 def main(sources: list[str]) -> None:
     torch.set_num_threads(1)
     x = observations()
     for source in sources:
         net = load_policy_net(source) if source.endswith(".pt") else load_checkpoint_net(source)
         net = net.to(memory_format=torch.channels_last)
+        moved = stepped(net)
+        full, half = log_probs(net, x, bf16=False), log_probs(net, x, bf16=True)
+        rare = full < RARE_LOGP
         with torch.no_grad():
-            full = net(x).float()
-            with torch.autocast("cpu", dtype=torch.bfloat16):
-                half = net(x).float()
-        logp_full, logp_half = torch.log_softmax(full, -1), torch.log_softmax(half, -1)
-        spread = full.max(-1).values - full.min(-1).values
-        error = (logp_half - logp_full).abs()
-        rare = error[logp_full < RARE_LOGP]
-        rare_text = (f"median {rare.median():.3f}, max {rare.max():.2f}, share of actions "
-                     f"{rare.numel() / error.numel():.3f}" if rare.numel() else "none")
-        print(f"{source}: {len(x)} observations; logit spread median {spread.median():.1f}, max "
-              f"{spread.max():.1f}; |logp bf16 - fp32| median {error.median():.3f}; on actions "
-              f"below logp {RARE_LOGP:g}: {rare_text}")
+            logits = net(x)
+        spread = logits.max(-1).values - logits.min(-1).values
+        print(f"{source}: {len(x)} observations, logit spread median {spread.median():.1f} max "
+              f"{spread.max():.1f}, share of actions below logp {RARE_LOGP:g}: "
+              f"{rare.float().mean():.3f}")
+        print(f"  |logp bf16 - fp32|: {summary((half - full).abs(), rare)}")
+        for name, bf16 in (("fp32", False), ("bf16", True)):
+            change = (log_probs(moved, x, bf16) - log_probs(net, x, bf16)).abs()
+            print(f"  one step, {name}: {summary(change, rare)}")
+        print(f"  fp32 batch sizes 1-128 against all rows: max |logp| difference "
+              f"{batch_size_error(net, x):.1e}")
 
 
 if __name__ == "__main__":

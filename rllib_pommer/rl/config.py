@@ -28,11 +28,12 @@ with the config it started with, so a run keeps its number of env runners when r
 
 Speed settings, none of which changes what PPO computes (`python -m rllib_pommer.bench learn`
 and `bench train`, one core, figures in the README):
-- the module (rl_module.py) runs pi and vf channels-last under bfloat16 autocast, on the env
-  runners as in the learner, so the log-probabilities PPO's ratio compares are bit-identical
-  across batch sizes and the ratio starts at exactly 1; with the fused Adam of learner.py the
-  learner trains 1.52x the samples/s of the same update in plain float32 NCHW torch (0.77x
-  before);
+- the module (rl_module.py) runs pi and vf channels-last and vf under bfloat16 autocast; with
+  the fused Adam of learner.py the learner trains 1.21x the samples/s of the same update in plain
+  float32 NCHW torch (0.77x before any of these). pi ran under bfloat16 too until the paper
+  campaign's first run collapsed at ~93,000 games (1.52x then): its rounding moves PPO's ratio
+  past the clip (rl_module.py, with the measurement), so pi is float32 from that run's restart
+  at 83,562 games on, and in every run started or resumed since;
 - `episodes_to_numpy=False`: RLlib's env runner converts every finished episode of a sample call
   to numpy again after each env step (quadratic in the episodes per call; 28% of sampling time in
   a profile of the paper curriculum); the learner connector batches lists as well, so episodes

@@ -14,13 +14,20 @@ not an error here: pi starts empty and `pi_source` says so, until `set_state` fi
 module that is about to be trained with neither source is wrong, and the learner refuses that
 (`require_pi`); a new run's weights file is checked before Ray starts (config.check_pi_weights).
 
-Speed (`python -m rllib_pommer.bench learn`, one thread): both networks keep their tensors
-channels-last, which oneDNN's CPU convolutions run about 1.4x faster than NCHW, and run under
-bfloat16 autocast, about 1.6x faster again on CPUs with AVX-512 BF16. pi runs the same way on the
-env runners as in the learner: PPO compares the learner's log-probabilities with the env runner's
-through a ratio clipped at 1 +- 0.01, and bfloat16 results are bit-identical across batch sizes
-(checked from 1 to 4096 rows), so the ratio starts at exactly 1. (Bfloat16 in the learner alone
-moved it by 0.18% on average and past the clip on 1.5% of decisions before any update.)
+Precision and speed (`python -m rllib_pommer.bench learn`, one thread): both networks keep their
+tensors channels-last, which oneDNN's CPU convolutions run about 1.4x faster than NCHW. vf runs
+under bfloat16 autocast (about 1.6x faster again on CPUs with AVX-512 BF16); pi runs in float32,
+on the env runners as in the learner, because PPO's ratio compares pi's log-probabilities before
+and after updates through a clip of 1 +- 0.01, and bfloat16 rounds a logit of magnitude m to a
+step of up to m/128: one Adam-sized step (every weight moved by 1e-4) moved the log-probabilities of
+actions below e^-10, the ones a filter override puts into the batch, by p99 0.25 (max 0.38) in
+bfloat16 against 0.047 (max 0.060) in float32, on the paper run's checkpoint at 83,562 games; on
+its collapsed end (logit spread ~1,000) by p99 4.0 (max 10) against 0.56
+(`benchmarks/logit_precision.py`). Rounding alone thus swung ratios far past the clip, and with a
+negative advantage PPO weights a row by its whole ratio: the paper campaign's first run in
+bfloat16 collapsed at ~93,000 games (log-ratio up to 72). Float32 results differ across batch
+sizes (1 to 128 rows against 410) by 1.1e-5 in a log-probability at most (2.4e-4 at the
+collapsed end), far inside the clip.
 
 `set_pi_frozen` serves the value warm-up (paper: 10,000 games with pi fixed while vf learns). It
 sets `requires_grad`, which checkpoints do not keep, so the curriculum callback re-applies it after
@@ -42,8 +49,8 @@ from .names import LEARNER  # noqa: F401  (its module id, long imported from her
 
 
 class PommerPPOModule(TorchRLModule, ValueFunctionAPI):
-    """The PPO learner module: pi (the paper's CNN, from the imitation weights) and a separate
-    value CNN, both channels-last under bfloat16 autocast (module docstring)."""
+    """The PPO learner module: pi (the paper's CNN, from the imitation weights) in float32 and a
+    separate value CNN under bfloat16 autocast, both channels-last (module docstring)."""
     def setup(self):
         self.pi = PommerNet(6, dropout=0.0).to(memory_format=torch.channels_last)
         self.vf = PommerNet(1).to(memory_format=torch.channels_last)
@@ -71,8 +78,7 @@ class PommerPPOModule(TorchRLModule, ValueFunctionAPI):
         return batch[Columns.OBS]["planes"].contiguous(memory_format=torch.channels_last)
 
     def _forward(self, batch, **kwargs):
-        with torch.autocast("cpu", dtype=torch.bfloat16):
-            return {Columns.ACTION_DIST_INPUTS: self.pi(self._planes(batch)).float()}
+        return {Columns.ACTION_DIST_INPUTS: self.pi(self._planes(batch))}
 
     def compute_values(self, batch, embeddings=None) -> torch.Tensor:
         with torch.autocast("cpu", dtype=torch.bfloat16):

@@ -84,8 +84,9 @@ def test_stage_boundary_and_warmup_freeze(smoke):
         assert health["nonfinite_updates_skipped"] == 0
         assert 0 < health["pi_logit_spread"] < 1e3
         ratio = health["pi_log_ratio_min"], health["pi_log_ratio_max"]
-        if it["stage"] == 0:  # pi frozen: the learner's log-probabilities are the sampler's
-            assert ratio == (0.0, 0.0)
+        if it["stage"] == 0:  # pi frozen: the learner's log-probabilities are the sampler's, up
+            # to float32 rounding across batch sizes (rl_module.py: ~1e-5; PPO's clip is 0.01)
+            assert -1e-4 < ratio[0] <= 0.0 <= ratio[1] < 1e-4
         else:  # the first minibatch meets pi as it sampled, then pi moves
             assert ratio[0] <= 0.0 <= ratio[1] < 88 and ratio != (0.0, 0.0)
     shares = [it["result"]["env_runners"].get("learner_override_share", 0) for it in iterations]
