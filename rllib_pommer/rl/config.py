@@ -8,7 +8,8 @@ because every outcome is paid at the end and with 0.99 a tie's -1 some 400 steps
 and lr 3e-4 ended with every training game tied); GAE lambda 0.95; 4 epochs over batches of 4,000
 env steps (~3,500 learner rows; all four agents step, and the learner's rows are the ones
 trained); value loss coefficient 1 with RLlib's default value clip 10 (returns are within
-[-1, 1]); no KL penalty (the clip does the work); gradient norm clip 10; 8 envs per env runner
+[-1, 1]); no KL penalty (the clip does the work); no dual clip (learner.py; a curriculum's
+`dual_clip` sets its bound); gradient norm clip 10; 8 envs per env runner
 (batched inference, rllib-notes I). More envs amortise RLlib's per-step connector and inference
 calls: against SimpleAgents, sampling alone ran 1.16x the env steps/s with 16, 1.47x with 32 and
 1.55x with 64, and whole iterations (4 epochs of learning included) 1.13x with 32 (medians of 4-5
@@ -49,6 +50,7 @@ and `bench train`, one core, figures in the README):
 from __future__ import annotations
 
 from functools import partial
+from math import inf
 from pathlib import Path
 
 from ray.rllib.algorithms.ppo import PPOConfig
@@ -61,13 +63,20 @@ from .connectors import LearnerFilters
 from .curriculum import Curriculum
 from .env import ENV_NAME
 from .fixed_modules import fixed_module_spec
-from .learner import PommerPPOLearner
+from .learner import DUAL_CLIP_KEY, PommerPPOLearner
 from .mapping import SeatMapping
 from .rl_module import LEARNER, PommerPPOModule
+from .settings import PPOSettings
 
 
 def _learner_filters(env=None, spaces=None, device=None):
     return [LearnerFilters()]
+
+
+def _dual_clip(ppo: PPOSettings) -> dict:
+    """The learner's dual-clip bound, only where there is one: Tune resumes a run only with the
+    config keys it started with, and `learner_config_dict/dual_clip` would be a new one."""
+    return {"learner_config_dict": {DUAL_CLIP_KEY: ppo.dual_clip}} if ppo.dual_clip < inf else {}
 
 
 def check_pi_weights(path: Path) -> Path:
@@ -120,7 +129,7 @@ def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None
             minibatch_size=ppo.minibatch_size, lr=ppo.lr, gamma=ppo.gamma, lambda_=ppo.lambda_,
             num_epochs=ppo.num_epochs, train_batch_size_per_learner=ppo.train_batch_size,
             vf_loss_coeff=ppo.vf_loss_coeff, use_kl_loss=ppo.use_kl_loss,
-            grad_clip=ppo.grad_clip)
+            grad_clip=ppo.grad_clip, **_dual_clip(ppo))
         .learners(learner_class=PommerPPOLearner)
         .callbacks(partial(CurriculumCallback, curriculum))
         .debugging(seed=seed)

@@ -1,5 +1,6 @@
-"""PPO's torch learner with four changes: Adam runs fused, its connector batches only the agents it
-trains, it never trains a pi without weights, and it skips an update whose gradients are not finite.
+"""PPO's torch learner with five changes: Adam runs fused, its connector batches only the agents it
+trains, it never trains a pi without weights, it skips an update whose gradients are not finite,
+and it can bound the ratio of rows with a negative advantage (dual clip, off by default).
 
 RLlib's default optimizer is `torch.optim.Adam` with its per-tensor Python loop; the fused CPU
 kernel updates all of a module's parameters in one call: 0.18 ms instead of 0.65 ms per minibatch
@@ -22,26 +23,49 @@ SimpleAgent fell from 0.76 to 0.24 and pi's logit spread (largest minus smallest
 over the decisions of 16 games) grew from about 20 to 8,100, so that it never placed a bomb against
 StaticAgent. Each iteration logs how many updates it skipped (`nonfinite_updates_skipped`) and
 the largest batch-mean logit spread pi produced (`pi_logit_spread`), and the extremes of PPO's
-log-ratio (`pi_log_ratio_max`, `pi_log_ratio_min`: `_log_pi_health`), all kept in history.csv.
+log-ratio (`pi_log_ratio_max`, `pi_log_ratio_min`: `_log_pi_health`), all kept in history.csv,
+and the same extremes over the rows whose action pi gave a log-probability below -10 when it
+sampled (`pi_rare_log_ratio_max`, `_min`; `pi_rare_rows` counts them once per epoch): at ~3,500
+rows per iteration pi itself draws such an action about once in a thousand iterations, so these
+are the filters' overrides.
+
+Dual clip (Ye et al. 2020, "Mastering Complex Control in MOBA Games with Deep RL"): PPO's clipped
+loss bounds the ratio r of a row with a positive advantage, but weights a row with a negative
+advantage A by the whole r, so a row whose probability grew by e^20 since it was sampled pulls
+with 5e8 times its share. The dual-clip loss max(min(rA, clip(r)A), cA) caps that row at cA, a
+constant: its gradient is zero. The learner gets the same gradient from RLlib's loss by zeroing
+such rows' advantages (`dual_clipped`; the loss value differs by a constant). `dual_clip` in a
+curriculum's [ppo] table sets c; the default, inf, is PPO as the paper ran it.
 """
 
 from __future__ import annotations
 
+import math
 import os
 
 import torch
 from ray.rllib.algorithms.ppo.torch.ppo_torch_learner import PPOTorchLearner
 from ray.rllib.core.columns import Columns
+from ray.rllib.evaluation.postprocessing import Postprocessing
 
 from .names import LEARNER_THREADS_ENV
 from .rl_module import LEARNER
 from .trained_agents import TrainedAgentsOnly
 
+DUAL_CLIP_KEY = "dual_clip"  # in the config's learner_config_dict
+RARE_LOGP = -10.0  # a sampled log-probability below this is a filter's override (docstring)
+
+
+def dual_clipped(advantages: torch.Tensor, log_ratio: torch.Tensor, bound: float) -> torch.Tensor:
+    """The rows whose advantage PPO's clipped loss must see as 0 to have the dual-clip loss's
+    gradient: a negative advantage and a ratio beyond `bound` (module docstring)."""
+    return (advantages < 0) & (log_ratio > math.log(bound))
+
 
 class PommerPPOLearner(PPOTorchLearner):
     """RLlib's PPO torch learner with a fused Adam per module and a connector that batches the
-    trained agents only, which refuses to train a learner module whose pi has no weights (module
-    docstring)."""
+    trained agents only, which refuses to train a learner module whose pi has no weights, skips
+    non-finite updates and can dual-clip (module docstring)."""
     def build(self) -> None:
         # Ray gives the algorithm's process, where this learner lives (and samples, without
         # remote env runners), one OpenMP thread per CPU it holds (one); `train
@@ -58,26 +82,41 @@ class PommerPPOLearner(PPOTorchLearner):
 
     def compute_loss_for_module(self, *, module_id, config, batch, fwd_out):
         if module_id == LEARNER:
-            self._log_pi_health(batch, fwd_out[Columns.ACTION_DIST_INPUTS].detach())
+            logits = fwd_out[Columns.ACTION_DIST_INPUTS].detach()
+            dist = self.module[LEARNER].unwrapped().get_train_action_dist_cls().from_logits(logits)
+            log_ratio = dist.logp(batch[Columns.ACTIONS]) - batch[Columns.ACTION_LOGP]  # PPO's
+            self._log_pi_health(batch, logits, log_ratio)
+            bound = config.learner_config_dict.get(DUAL_CLIP_KEY, math.inf)
+            if bound < math.inf:
+                advantages = batch[Postprocessing.ADVANTAGES]
+                clipped = dual_clipped(advantages, log_ratio, bound)
+                if Columns.LOSS_MASK in batch:
+                    clipped &= batch[Columns.LOSS_MASK].bool()
+                self.metrics.log_value((LEARNER, "pi_dual_clipped_rows"), int(clipped.sum()),
+                                       reduce="sum")
+                batch = {**batch, Postprocessing.ADVANTAGES: advantages.masked_fill(clipped, 0)}
         return super().compute_loss_for_module(module_id=module_id, config=config, batch=batch,
                                                fwd_out=fwd_out)
 
-    def _log_pi_health(self, batch, logits: torch.Tensor) -> None:
+    def _log_pi_health(self, batch, logits: torch.Tensor, log_ratio: torch.Tensor) -> None:
         """Per iteration: the largest batch-mean logit spread, and the extremes of PPO's log-ratio
-        (log pi(a) now minus when sampled) over the rows it trains on: a log-ratio above 88
-        overflows PPO's float32 ratio to inf, whose backward is nan even where the clip or the
-        min leaves that row's gradient at zero (the suspected trigger of the collapse above)."""
+        (log pi(a) now minus when sampled) over the rows it trains on, all and rare (module
+        docstring): a log-ratio above 88 overflows PPO's float32 ratio to inf, whose backward is
+        nan even where the clip or the min leaves that row's gradient at zero."""
         spread = (logits.max(-1).values - logits.min(-1).values).mean()
         self.metrics.log_value((LEARNER, "pi_logit_spread"), spread.item(), reduce="max")
-        dist = self.module[LEARNER].unwrapped().get_train_action_dist_cls().from_logits(logits)
-        log_ratio = dist.logp(batch[Columns.ACTIONS]) - batch[Columns.ACTION_LOGP]  # as PPO's
+        sampled_logp = batch[Columns.ACTION_LOGP]
         if Columns.LOSS_MASK in batch:
-            log_ratio = log_ratio[batch[Columns.LOSS_MASK].bool()]
-        if log_ratio.numel():
-            self.metrics.log_value((LEARNER, "pi_log_ratio_max"), log_ratio.max().item(),
-                                   reduce="max")
-            self.metrics.log_value((LEARNER, "pi_log_ratio_min"), log_ratio.min().item(),
-                                   reduce="min")
+            valid = batch[Columns.LOSS_MASK].bool()
+            log_ratio, sampled_logp = log_ratio[valid], sampled_logp[valid]
+        rare = sampled_logp < RARE_LOGP
+        self.metrics.log_value((LEARNER, "pi_rare_rows"), int(rare.sum()), reduce="sum")
+        for prefix, rows in (("pi_log_ratio", log_ratio), ("pi_rare_log_ratio", log_ratio[rare])):
+            if rows.numel():
+                self.metrics.log_value((LEARNER, f"{prefix}_max"), rows.max().item(),
+                                       reduce="max")
+                self.metrics.log_value((LEARNER, f"{prefix}_min"), rows.min().item(),
+                                       reduce="min")
 
     def apply_gradients(self, gradients_dict) -> None:
         finite = all(grad is None or torch.isfinite(grad).all()

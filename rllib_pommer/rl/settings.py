@@ -13,6 +13,7 @@ override the fields marked as options (our choices, argued in rl/config.py), nev
 from __future__ import annotations
 
 import dataclasses
+import math
 import typing
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -37,6 +38,9 @@ class PPOSettings:
     num_envs_per_env_runner: int = _option(8)
     vf_loss_coeff: float = _option(1.0, low=0)
     checkpoint_every: int = _option(5)  # iterations between Tune checkpoints
+    # The dual clip's bound on the ratio of rows with a negative advantage (rl/learner.py);
+    # inf: none, PPO as the paper ran it.
+    dual_clip: float = _option(math.inf, low=1)
     # Fixed: the paper's (entropy, clip, minibatch) and ours (no KL penalty, gradient clip).
     entropy_coeff: float = 0.0
     clip_param: float = 0.01

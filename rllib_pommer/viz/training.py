@@ -64,7 +64,10 @@ SUMMARY_COLUMNS = (
     "env_runners/learner_tie", "env_runners/learner_override_share",
     "env_runners/episode_len_mean", "learners/learner/vf_explained_var",
     "learners/learner/pi_logit_spread", "learners/learner/nonfinite_updates_skipped",
-    "learners/learner/pi_log_ratio_max", "learners/learner/pi_log_ratio_min", "time_this_iter_s")
+    "learners/learner/pi_log_ratio_max", "learners/learner/pi_log_ratio_min",
+    "learners/learner/pi_rare_rows", "learners/learner/pi_rare_log_ratio_max",
+    "learners/learner/pi_rare_log_ratio_min", "learners/learner/pi_dual_clipped_rows",
+    "time_this_iter_s")
 WINDOW = 1000
 RLLIB_WINDOW = 100  # RLlib's metrics_num_episodes_for_smoothing, which our config leaves as is
 

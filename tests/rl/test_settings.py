@@ -32,14 +32,22 @@ def _config_values(config: dict) -> dict:
 
 
 def test_every_setting_but_checkpointing_reaches_the_ppo_config(tmp_path):
-    assert set(CONFIG_KEYS) | {"checkpoint_every"} == {
+    assert set(CONFIG_KEYS) | {"checkpoint_every", "dual_clip"} == {
         f.name for f in dataclasses.fields(PPOSettings)}
-    (tmp_path / "c.toml").write_text("[ppo]\nlr = 3e-4\nlambda = 0.9\nnum_epochs = 2\n" + STAGE)
+    (tmp_path / "c.toml").write_text(
+        "[ppo]\nlr = 3e-4\nlambda = 0.9\nnum_epochs = 2\ndual_clip = 3\n" + STAGE)
     curriculum = load_curriculum(tmp_path / "c.toml")
-    assert curriculum.ppo == PPOSettings(lr=3e-4, lambda_=0.9, num_epochs=2)
+    assert curriculum.ppo == PPOSettings(lr=3e-4, lambda_=0.9, num_epochs=2, dual_clip=3.0)
     expected = dataclasses.asdict(curriculum.ppo)
     del expected["checkpoint_every"]  # Tune's, not PPO's: rl/training.py
-    assert _config_values(build_config(curriculum, restoring=True).to_dict()) == expected
+    config = build_config(curriculum, restoring=True).to_dict()
+    assert config["learner_config_dict"] == {"dual_clip": expected.pop("dual_clip")}  # learner.py
+    assert _config_values(config) == expected
+
+
+def test_without_a_dual_clip_the_learner_config_has_no_key_for_it():
+    """Tune's key check (below): runs started before the option existed resume without it."""
+    assert build_config(load_curriculum("paper"), restoring=True).learner_config_dict == {}
 
 
 @pytest.mark.parametrize("table, error", [
@@ -48,6 +56,7 @@ def test_every_setting_but_checkpointing_reaches_the_ppo_config(tmp_path):
     ("gamma = 1.5", "gamma must be in (0, 1], got 1.5"),
     ("num_epochs = 0", "num_epochs must be a positive integer, got 0"),
     ("lr = true", "lr must be a number, got True"),
+    ("dual_clip = 1", "dual_clip must be in (1, inf], got 1"),
 ])
 def test_a_ppo_table_sets_options_only_and_in_range(tmp_path, table, error):
     (tmp_path / "c.toml").write_text(f"[ppo]\n{table}\n" + STAGE)
