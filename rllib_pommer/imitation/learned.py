@@ -22,13 +22,15 @@ import torch
 
 from ..agents.base import innermost
 from ..agents.registry import PolicySpec, make_agent, register_kind, resolve_policy
+from ..game.constants import NUM_ACTIONS
 from ..game.observation import Observation
 from .features import featurize
 from .network import PommerNet
 
 
-def load_policy_net(path: str | Path) -> PommerNet:
-    """A policy network (dropout off, eval mode) from a state_dict file, with a clear error."""
+def load_policy_net(path: str | Path, num_outputs: int = NUM_ACTIONS) -> PommerNet:
+    """A policy network (dropout off, eval mode) from a state_dict file, with a clear error;
+    `num_outputs=1` reads a PPO value network."""
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"{path}: weights file not found")
@@ -36,7 +38,7 @@ def load_policy_net(path: str | Path) -> PommerNet:
         state = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as exc:  # torch raises several types for corrupt or foreign files
         raise ValueError(f"{path}: not a readable weights file ({exc})") from None
-    net = PommerNet()
+    net = PommerNet(num_outputs)
     try:
         net.load_state_dict(state)
     except (RuntimeError, TypeError, AttributeError) as exc:

@@ -30,6 +30,7 @@ from pathlib import Path
 import torch
 
 from ..agents.registry import PolicySpec, policy_names, register_kind, resolve_policy
+from ..game.constants import NUM_ACTIONS
 from ..imitation.learned import LearnedAgent, LearnedPolicy, load_policy_net, weights_file
 from ..imitation.network import PommerNet
 from ..viz.training import HISTORY_FILE, Trial, number, read_trial, write_summary
@@ -42,6 +43,9 @@ CURRICULUM_IN_PARAMS = re.compile(r"Curriculum\(name='([^']+)'")
 # A history row's identity across commits (the clock is not: a pack may have repaired it).
 LINEAGE_COLUMNS = ("env_runners/num_env_steps_sampled_lifetime",
                    "env_runners/num_episodes_lifetime")
+
+
+VF_WEIGHTS_FILE = "vf.pt"  # an exported learner's value network
 
 
 def latest_checkpoint(path: str | Path) -> Path:
@@ -109,17 +113,21 @@ def _load_state(stream: typing.BinaryIO, name: object) -> dict:
     return state
 
 
-def load_checkpoint_net(path: str | Path) -> PommerNet:
-    """The learner's policy network (eval mode) from a checkpoint, trial or run folder."""
+def load_checkpoint_net(path: str | Path, part: str = "pi") -> PommerNet:
+    """The learner's policy network (`part="pi"`) or value network (`"vf"`), eval mode, from a
+    checkpoint, trial or run folder."""
+    if part not in ("pi", "vf"):
+        raise ValueError(f"part must be 'pi' or 'vf', got {part!r}")
     state_file = latest_checkpoint(path) / MODULE_STATE
     state = read_module_state(state_file)
-    pi = {str(key).removeprefix("pi."): torch.as_tensor(value) for key, value in state.items()
-          if str(key).startswith("pi.")}
-    net = PommerNet()
+    weights = {str(key).removeprefix(f"{part}."): torch.as_tensor(value)
+               for key, value in state.items() if str(key).startswith(f"{part}.")}
+    net = PommerNet(NUM_ACTIONS if part == "pi" else 1)
     try:
-        net.load_state_dict(pi)
+        net.load_state_dict(weights)
     except (RuntimeError, TypeError) as exc:
-        raise ValueError(f"{state_file}: learner weights do not fit PommerNet ({exc})") from None
+        raise ValueError(f"{state_file}: learner {part} weights do not fit PommerNet "
+                         f"({exc})") from None
     return net.eval()
 
 
@@ -278,7 +286,8 @@ def _source(policy: str, checkpoint: Path, trial: Trial, iteration: int,
 
 def export_policy(source: str | Path, target: str | Path) -> tuple[Path, Path, Path]:
     """Ship the learner of a checkpoint, trial or run folder as a policy like `imitation`:
-    `target/pi.pt`, a plain state_dict that `torch.load(weights_only=True)` reads,
+    `target/pi.pt`, a plain state_dict that `torch.load(weights_only=True)` reads, its value
+    network as `target/vf.pt` (for a run that continues it: a curriculum's `vf_weights`),
     `target.toml` (kind learned, sampling, as the arena plays a run folder) and the model card
     `target/MODEL_CARD.md` with what it is drawn from (viz/model_card.py): the trial's rows up to
     the checkpoint and `source.json`. Existing weights or policy files are never replaced."""
@@ -298,11 +307,12 @@ def export_policy(source: str | Path, target: str | Path) -> tuple[Path, Path, P
     curriculum = _run_curriculum(trial.path)
     target = Path(target)
     weights, policy_file = target / WEIGHTS_FILE, target.with_suffix(".toml")
-    for path in (weights, policy_file):
+    for path in (weights, target / VF_WEIGHTS_FILE, policy_file):
         if path.exists():
             raise ValueError(f"{path} exists; export to another name or move it aside")
     target.mkdir(parents=True, exist_ok=True)
     torch.save(net.state_dict(), weights)
+    torch.save(load_checkpoint_net(checkpoint, "vf").state_dict(), target / VF_WEIGHTS_FILE)
     write_policy_file(target, f"PPO learner exported from {checkpoint.parent.name}/"
                               f"{checkpoint.name}; see {target.name}/{CARD_FILE}", greedy=False)
     write_summary(Trial(trial.path, rows), target / TRAINING_DIR / trial.name)

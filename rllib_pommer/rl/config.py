@@ -57,6 +57,7 @@ from ray.rllib.algorithms.ppo import PPOConfig
 from ray.rllib.core.rl_module.multi_rl_module import MultiRLModuleSpec
 from ray.rllib.core.rl_module.rl_module import RLModuleSpec
 
+from ..game.constants import NUM_ACTIONS
 from ..imitation.learned import load_policy_net
 from .callbacks import CurriculumCallback
 from .connectors import LearnerFilters
@@ -79,14 +80,17 @@ def _dual_clip(ppo: PPOSettings) -> dict:
     return {"learner_config_dict": {DUAL_CLIP_KEY: ppo.dual_clip}} if ppo.dual_clip < inf else {}
 
 
-def check_pi_weights(path: Path) -> Path:
-    """The weights file, resolved, once it has loaded into a PommerNet: a missing, cut short or
-    foreign file is named here, before Ray starts, not deep inside a Ray actor."""
+def check_weights(path: Path, num_outputs: int = NUM_ACTIONS) -> Path:
+    """The weights file, resolved, once it has loaded into a PommerNet (`num_outputs=1`: a value
+    network): a missing, cut short or foreign file is named here, before Ray starts, not deep
+    inside a Ray actor."""
     if not Path(path).is_file():
         raise ValueError(
             f"imitation weights not found: {path} (train them with `python -m "
-            f"rllib_pommer.imitate`, set pi_weights in the curriculum file, or pass --pi-weights)")
-    load_policy_net(path)
+            f"rllib_pommer.imitate`, set pi_weights in the curriculum file, or pass --pi-weights)"
+            if num_outputs == NUM_ACTIONS else
+            f"vf_weights not found: {path} (the curriculum file names it)")
+    load_policy_net(path, num_outputs)
     return Path(path).resolve()
 
 
@@ -101,11 +105,15 @@ def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None
     learner waits (its torch threads: names.LEARNER_THREADS_ENV). Tune resumes a run only with
     the key set it started with, so no key may be added here for a run already under way."""
     weights = Path(pi_weights) if pi_weights else curriculum.pi_weights
-    weights = weights.resolve() if restoring else check_pi_weights(weights)
+    weights = weights.resolve() if restoring else check_weights(weights)
     first = curriculum.stages[0]
     ppo = curriculum.ppo
-    modules = {LEARNER: RLModuleSpec(module_class=PommerPPOModule,
-                                     model_config={"pi_weights": str(weights)})}
+    model_config = {"pi_weights": str(weights)}
+    if curriculum.vf_weights:  # only then: a run under way resumes with the keys it started with
+        vf_weights = curriculum.vf_weights
+        model_config["vf_weights"] = str(vf_weights if restoring else check_weights(
+            vf_weights, num_outputs=1))
+    modules = {LEARNER: RLModuleSpec(module_class=PommerPPOModule, model_config=model_config)}
     modules |= {name: fixed_module_spec(name) for name in curriculum.policies()}
     return (
         PPOConfig()

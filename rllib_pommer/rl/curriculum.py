@@ -46,7 +46,8 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-TOP_KEYS = ("name", "description", "pi_weights", "max_steps", "ppo", "defaults", "stage")
+TOP_KEYS = ("name", "description", "pi_weights", "vf_weights", "max_steps", "ppo", "defaults",
+            "stage")
 
 
 @dataclass(frozen=True)
@@ -87,6 +88,14 @@ class Curriculum:
         Curriculum that a run under way restores (Tune keeps it in the run's config)."""
         with self.path.open("rb") as f:
             return tomllib.load(f).get("description", "")
+
+    @property
+    def vf_weights(self) -> Path | None:
+        """The file's `vf_weights` (a value network's state_dict, relative to the file), read
+        again from it as `description` is; None: vf starts from random weights."""
+        with self.path.open("rb") as f:
+            name = tomllib.load(f).get("vf_weights")
+        return (self.path.parent / name).resolve() if name else None
 
     @property
     def total_episodes(self) -> int:
@@ -218,7 +227,8 @@ def load_curriculum(name_or_path: str | Path) -> Curriculum:
         raise ValueError(f"curriculum file {path}: invalid TOML ({exc})") from None
     where = f"curriculum file {path}"
     _check_keys(where, data, TOP_KEYS)
-    for key, kind in (("name", str), ("description", str), ("pi_weights", str)):
+    for key, kind in (("name", str), ("description", str), ("pi_weights", str),
+                      ("vf_weights", str)):
         if key in data:
             _check_type(where, key, data[key], kind)
     if "max_steps" in data:

@@ -12,7 +12,7 @@ saved with it, whose `pi_weights` is an absolute path on the machine that starte
 overwrites every weight with the checkpoint's. So a weights file that is missing at build time is
 not an error here: pi starts empty and `pi_source` says so, until `set_state` fills it. Only a
 module that is about to be trained with neither source is wrong, and the learner refuses that
-(`require_pi`); a new run's weights file is checked before Ray starts (config.check_pi_weights).
+(`require_pi`); a new run's weights file is checked before Ray starts (config.check_weights).
 
 Precision and speed (`python -m rllib_pommer.bench learn`, one thread): both networks keep their
 tensors channels-last, which oneDNN's CPU convolutions run about 1.4x faster than NCHW. vf runs
@@ -28,6 +28,10 @@ negative advantage PPO weights a row by its whole ratio: the paper campaign's fi
 bfloat16 collapsed at ~93,000 games (log-ratio up to 72). Float32 results differ across batch
 sizes (1 to 128 rows against 410) by 1.1e-5 in a log-probability at most (2.4e-4 at the
 collapsed end), far inside the clip.
+
+A curriculum may also name `vf_weights`, a value network's state_dict, for a run that continues
+another's (its pi and vf exported from a checkpoint) without a value warm-up; like pi's file it
+is read only where the module is trained, and a restore overwrites it.
 
 `set_pi_frozen` serves the value warm-up (paper: 10,000 games with pi fixed while vf learns). It
 sets `requires_grad`, which checkpoints do not keep, so the curriculum callback re-applies it after
@@ -59,6 +63,9 @@ class PommerPPOModule(TorchRLModule, ValueFunctionAPI):
         if weights and not self.inference_only and Path(weights).is_file():
             self.pi.load_state_dict(load_policy_net(weights).state_dict())
             self.pi_source = f"imitation weights {weights}"
+        vf_weights = self.model_config.get("vf_weights")  # a run that continues another's
+        if vf_weights and not self.inference_only and Path(vf_weights).is_file():
+            self.vf.load_state_dict(load_policy_net(vf_weights, num_outputs=1).state_dict())
 
     def set_state(self, state) -> None:
         super().set_state(state)

@@ -33,7 +33,7 @@ from ray import tune
 
 from . import ray_session, tune_state
 from .checkpoint_policy import trial_dirs, unreadable
-from .config import build_config, check_pi_weights
+from .config import build_config, check_weights
 from .curriculum import Curriculum, load_curriculum
 from .names import LEARNER, LEARNER_THREADS_ENV
 from .packing import pack_run
@@ -230,7 +230,7 @@ def start_run(settings: RunSettings, say=print) -> tuple[Curriculum, Path]:
     for note in kept_layouts(out, settings):
         say(note)
     if not resumes_from_checkpoint(out, settings.resume):  # else pi comes from the checkpoint
-        check_pi_weights(settings.pi_weights or curriculum.pi_weights)
+        check_weights(settings.pi_weights or curriculum.pi_weights)
     if settings.resume:
         for trial, (kept, registered) in pack_run(out).items():
             if kept != registered:

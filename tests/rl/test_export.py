@@ -45,7 +45,8 @@ def _fake_run(run: Path, pi: PommerNet, iterations: int = 4, checkpoint_at: int 
     a value net) as RLlib saves them."""
     trial = run / "PPO_pommerman_team_00000"
     state = OrderedDict((f"pi.{k}", v.numpy()) for k, v in pi.state_dict().items())
-    state["vf.head.weight"] = torch.zeros(1, 4).numpy()
+    state |= {f"vf.{k}": torch.full_like(v, 0.5).numpy()
+              for k, v in PommerNet(1).state_dict().items()}
     for number, iteration in ((1, 1), (2, checkpoint_at)):
         path = trial / f"checkpoint_00000{number}"
         (path / MODULE_STATE).parent.mkdir(parents=True)
@@ -76,6 +77,9 @@ def test_export_writes_a_plain_state_dict_a_policy_the_arena_plays_and_a_card(tm
     weights = torch.load(target / "pi.pt", weights_only=True)
     assert weights.keys() == pi.state_dict().keys()
     assert all(torch.equal(weights[k], v) for k, v in pi.state_dict().items())
+    vf = torch.load(target / "vf.pt", weights_only=True)  # for a run that continues this one
+    assert vf.keys() == PommerNet(1).state_dict().keys()
+    assert all(torch.equal(v, torch.full_like(v, 0.5)) for v in vf.values())
     policy_file = target.with_suffix(".toml")
     assert 'weights = "ppo/pi.pt"' in policy_file.read_text()
     assert "checkpoint_000002" in policy_file.read_text()

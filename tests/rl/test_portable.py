@@ -105,3 +105,35 @@ def test_the_module_takes_pi_from_the_weights_or_a_checkpoint_and_never_trains_w
     moved.set_state(started.get_state())  # what a restore does next
     assert moved.pi_source == "checkpoint"
     moved.require_pi()
+
+
+def test_a_curriculum_with_vf_weights_starts_vf_from_them_and_checks_the_file(tmp_path, pi_weights):
+    """A run that continues another's (curriculum `vf_weights`): the module's vf is the file's,
+    and a file that is missing or not a value network is named before Ray starts."""
+    import torch
+
+    from rllib_pommer.imitation.network import PommerNet
+    from rllib_pommer.rl.config import build_config
+    from rllib_pommer.rl.env import ACTION_SPACE, OBSERVATION_SPACE
+    from rllib_pommer.rl.rl_module import LEARNER, PommerPPOModule
+
+    torch.manual_seed(1)
+    vf = PommerNet(1)
+    torch.save(vf.state_dict(), tmp_path / "vf.pt")
+    stage = '[[stage]]\nname = "a"\nopponent = "static"\nepisodes = 5\n'
+    (tmp_path / "c.toml").write_text(f'pi_weights = "{pi_weights}"\nvf_weights = "vf.pt"\n'
+                                     + stage)
+    config = build_config(load_curriculum(tmp_path / "c.toml"))
+    model_config = config.rl_module_spec.rl_module_specs[LEARNER].model_config
+    assert model_config["vf_weights"] == str(tmp_path / "vf.pt")
+    module = PommerPPOModule(observation_space=OBSERVATION_SPACE, action_space=ACTION_SPACE,
+                             model_config=model_config)
+    for key, value in vf.state_dict().items():
+        assert torch.equal(module.vf.state_dict()[key], value), key
+
+    torch.save(PommerNet().state_dict(), tmp_path / "vf.pt")  # a policy network, 6 outputs
+    with pytest.raises(ValueError, match=r"vf.pt: weights do not fit PommerNet"):
+        build_config(load_curriculum(tmp_path / "c.toml"))
+    (tmp_path / "vf.pt").unlink()
+    with pytest.raises(ValueError, match=r"vf_weights not found: .*vf.pt"):
+        build_config(load_curriculum(tmp_path / "c.toml"))
