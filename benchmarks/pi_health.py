@@ -31,14 +31,19 @@ REPO = Path(__file__).resolve().parents[1]
 COLLAPSED = ("57c1c4d", "campaign/paper/PPO_pommerman_team_2991b_00000_0_2026-12-01_18-58-15/"
              "history.csv", "paper, pi in bfloat16 (collapsed)")
 WINDOW = 25
+# Games played before a run began, for a run that continues another (its curriculum's
+# pi_weights and vf_weights): drawn from where it took over.
+CONTINUES = {"paper_dual_clip": 83_562}
+LABELS = {"paper": "paper, pi in float32 from 83,562 games",
+          "paper_dual_clip": "paper_dual_clip (dual clip 3, from paper at 83,562)"}
 EPISODES = "env_runners/num_episodes_lifetime"
 SPREAD = "learners/learner/pi_logit_spread"
 RATIO = ("learners/learner/pi_log_ratio_max", "learners/learner/pi_log_ratio_min")
 
 
-def series(rows: list[dict]) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    """{panel: (games, rolling median)} of one run's rows."""
-    games = np.array([number(row.get(EPISODES)) for row in rows])
+def series(rows: list[dict], offset: int = 0) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """{panel: (games, rolling median)} of one run's rows, `offset` games after the start."""
+    games = np.array([number(row.get(EPISODES)) for row in rows]) + offset
     spread = np.array([number(row.get(SPREAD)) for row in rows])
     ratio = np.array([max(abs(number(row.get(RATIO[0]))), abs(number(row.get(RATIO[1]))))
                       for row in rows])
@@ -72,11 +77,11 @@ def main(argv: list[str] | None = None) -> int:
             runs[run.name] = read_trial(trial).rows
     figure, (top, bottom) = plt.subplots(2, 1, figsize=(9, 7), sharex=True)
     for name, rows in runs.items():
-        lines = series(rows)
+        lines = series(rows, CONTINUES.get(name, 0))
         style = {"linestyle": ":"} if name == COLLAPSED[2] else {}
         for axis, panel in ((top, "spread"), (bottom, "ratio")):
             if panel in lines:
-                axis.plot(*lines[panel], label=name, linewidth=1.2, **style)
+                axis.plot(*lines[panel], label=LABELS.get(name, name), linewidth=1.2, **style)
     top.set(yscale="log", ylabel="pi's logit spread (largest batch mean)",
             title=f"pi's health per run (medians of {WINDOW} iterations)")
     bottom.set(yscale="log", ylabel="largest |log-ratio| PPO trained on",
