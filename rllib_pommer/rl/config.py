@@ -34,7 +34,8 @@ and `bench train`, one core, figures in the README):
   float32 NCHW torch (0.77x before any of these). pi ran under bfloat16 too until the paper
   campaign's first run collapsed at ~93,000 games (1.52x then): its rounding moves PPO's ratio
   past the clip (rl_module.py, with the measurement), so pi is float32 from that run's restart
-  at 83,562 games on, and in every run started or resumed since;
+  at 83,562 games on, and in every run started or resumed since (the restart drifted as well:
+  the rounding was not the cause, but PPO's ratio should not carry it);
 - `episodes_to_numpy=False`: RLlib's env runner converts every finished episode of a sample call
   to numpy again after each env step (quadratic in the episodes per call; 28% of sampling time in
   a profile of the paper curriculum); the learner connector batches lists as well, so episodes
