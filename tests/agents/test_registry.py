@@ -15,7 +15,7 @@ from rllib_pommer.agents.scripted import SmartRandom, StaticAgent, SuicideTeamma
 from rllib_pommer.agents.simple import SimpleAgent
 
 SHIPPED = ["imitation", "imitation_v1", "imitation_v2", "ppo", "ppo_83562", "ppo_cautious",
-           "random", "simple", "simple_nobomb", "smart_random", "static", "suicide"]
+           "ppo_team", "random", "simple", "simple_nobomb", "smart_random", "static", "suicide"]
 
 
 def layers(agent):
