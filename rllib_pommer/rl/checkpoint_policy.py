@@ -46,6 +46,7 @@ LINEAGE_COLUMNS = ("env_runners/num_env_steps_sampled_lifetime",
 
 
 VF_WEIGHTS_FILE = "vf.pt"  # an exported learner's value network
+NET_OUTPUTS = {"pi": NUM_ACTIONS, "vf": 1}  # the learner module's networks (rl_module.py)
 
 
 def latest_checkpoint(path: str | Path) -> Path:
@@ -116,13 +117,13 @@ def _load_state(stream: typing.BinaryIO, name: object) -> dict:
 def load_checkpoint_net(path: str | Path, part: str = "pi") -> PommerNet:
     """The learner's policy network (`part="pi"`) or value network (`"vf"`), eval mode, from a
     checkpoint, trial or run folder."""
-    if part not in ("pi", "vf"):
-        raise ValueError(f"part must be 'pi' or 'vf', got {part!r}")
+    if part not in NET_OUTPUTS:
+        raise ValueError(f"part must be one of {list(NET_OUTPUTS)}, got {part!r}")
     state_file = latest_checkpoint(path) / MODULE_STATE
     state = read_module_state(state_file)
     weights = {str(key).removeprefix(f"{part}."): torch.as_tensor(value)
                for key, value in state.items() if str(key).startswith(f"{part}.")}
-    net = PommerNet(NUM_ACTIONS if part == "pi" else 1)
+    net = PommerNet(NET_OUTPUTS[part])
     try:
         net.load_state_dict(weights)
     except (RuntimeError, TypeError) as exc:

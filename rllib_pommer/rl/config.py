@@ -110,8 +110,8 @@ def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None
     first = curriculum.stages[0]
     ppo = curriculum.ppo
     model_config = {"pi_weights": str(weights)}
-    if curriculum.vf_weights:  # only then: a run under way resumes with the keys it started with
-        vf_weights = curriculum.vf_weights
+    vf_weights = curriculum.vf_weights  # a property that parses the file: read it once
+    if vf_weights:  # only then: a run under way resumes with the keys it started with
         model_config["vf_weights"] = str(vf_weights if restoring else check_weights(
             vf_weights, num_outputs=1))
     modules = {LEARNER: RLModuleSpec(module_class=PommerPPOModule, model_config=model_config)}

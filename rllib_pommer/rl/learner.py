@@ -85,30 +85,27 @@ class PommerPPOLearner(PPOTorchLearner):
             logits = fwd_out[Columns.ACTION_DIST_INPUTS].detach()
             dist = self.module[LEARNER].unwrapped().get_train_action_dist_cls().from_logits(logits)
             log_ratio = dist.logp(batch[Columns.ACTIONS]) - batch[Columns.ACTION_LOGP]  # PPO's
-            self._log_pi_health(batch, logits, log_ratio)
+            valid = (batch[Columns.LOSS_MASK].bool() if Columns.LOSS_MASK in batch
+                     else torch.ones_like(log_ratio, dtype=torch.bool))
+            self._log_pi_health(logits, log_ratio[valid], batch[Columns.ACTION_LOGP][valid])
             bound = config.learner_config_dict.get(DUAL_CLIP_KEY, math.inf)
             if bound < math.inf:
                 advantages = batch[Postprocessing.ADVANTAGES]
-                clipped = dual_clipped(advantages, log_ratio, bound)
-                if Columns.LOSS_MASK in batch:
-                    clipped &= batch[Columns.LOSS_MASK].bool()
+                clipped = dual_clipped(advantages, log_ratio, bound) & valid
                 self.metrics.log_value((LEARNER, "pi_dual_clipped_rows"), int(clipped.sum()),
                                        reduce="sum")
                 batch = {**batch, Postprocessing.ADVANTAGES: advantages.masked_fill(clipped, 0)}
         return super().compute_loss_for_module(module_id=module_id, config=config, batch=batch,
                                                fwd_out=fwd_out)
 
-    def _log_pi_health(self, batch, logits: torch.Tensor, log_ratio: torch.Tensor) -> None:
+    def _log_pi_health(self, logits: torch.Tensor, log_ratio: torch.Tensor,
+                       sampled_logp: torch.Tensor) -> None:
         """Per iteration: the largest batch-mean logit spread, and the extremes of PPO's log-ratio
         (log pi(a) now minus when sampled) over the rows it trains on, all and rare (module
         docstring): a log-ratio above 88 overflows PPO's float32 ratio to inf, whose backward is
         nan even where the clip or the min leaves that row's gradient at zero."""
         spread = (logits.max(-1).values - logits.min(-1).values).mean()
         self.metrics.log_value((LEARNER, "pi_logit_spread"), spread.item(), reduce="max")
-        sampled_logp = batch[Columns.ACTION_LOGP]
-        if Columns.LOSS_MASK in batch:
-            valid = batch[Columns.LOSS_MASK].bool()
-            log_ratio, sampled_logp = log_ratio[valid], sampled_logp[valid]
         rare = sampled_logp < RARE_LOGP
         self.metrics.log_value((LEARNER, "pi_rare_rows"), int(rare.sum()), reduce="sum")
         for prefix, rows in (("pi_log_ratio", log_ratio), ("pi_rare_log_ratio", log_ratio[rare])):
