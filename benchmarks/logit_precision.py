@@ -8,8 +8,10 @@ log-probability -10 (the rare actions a filter override puts into PPO's batch, w
 clip of 0.01 is meant to bound):
 - `|logp bf16 - fp32|`: the rounding error of bfloat16 itself;
 - `one step`: |logp after - logp before| when every weight moves by 1e-4 (the size of an Adam
-  step at lr 1e-4, signs drawn with seed 0), computed in float32 and in bfloat16: the log-ratio
-  one update gives PPO, real change plus, in bfloat16, the rounding that the step flips;
+  step at lr 1e-4, signs drawn with seed 0), computed in float32, in bfloat16, and with only the
+  convolutions in bfloat16 (`trunk bf16`: the head, and so the logits, in float32; the
+  convolutions are most of pi's FLOPs): the log-ratio one update gives PPO, real change plus, in
+  bfloat16, the rounding that the step flips;
 - the largest |logp| difference between float32 batches of 1 to 128 rows and all rows at once
   (the env runners' batches against the learner's).
 Not part of CI; figures in rl/rl_module.py.
@@ -45,9 +47,18 @@ def observations(games: int = 4, steps: int = 300) -> torch.Tensor:
     return torch.as_tensor(np.stack(planes)).contiguous(memory_format=torch.channels_last)
 
 
-def log_probs(net: torch.nn.Module, x: torch.Tensor, bf16: bool) -> torch.Tensor:
-    with torch.no_grad(), torch.autocast("cpu", dtype=torch.bfloat16, enabled=bf16):
-        return torch.log_softmax(net(x).float(), -1)
+PRECISIONS = ("fp32", "bf16", "trunk bf16")
+
+
+def log_probs(net: torch.nn.Module, x: torch.Tensor, precision: str = "fp32") -> torch.Tensor:
+    """pi's log-probabilities with everything in float32, everything under bfloat16 autocast,
+    or only the convolutions (`net.convs`) under it."""
+    with torch.no_grad():
+        with torch.autocast("cpu", dtype=torch.bfloat16, enabled=precision != "fp32"):
+            hidden = net.convs(x)
+        with torch.autocast("cpu", dtype=torch.bfloat16, enabled=precision == "bf16"):
+            logits = net.head(hidden.float() if precision == "trunk bf16" else hidden)
+        return torch.log_softmax(logits.float(), -1)
 
 
 def stepped(net: torch.nn.Module) -> torch.nn.Module:
@@ -60,8 +71,8 @@ def stepped(net: torch.nn.Module) -> torch.nn.Module:
 
 
 def batch_size_error(net: torch.nn.Module, x: torch.Tensor) -> float:
-    whole = log_probs(net, x, bf16=False)
-    return max((torch.cat([log_probs(net, x[i:i + size], bf16=False)
+    whole = log_probs(net, x)
+    return max((torch.cat([log_probs(net, x[i:i + size])
                            for i in range(0, len(x), size)]) - whole).abs().max().item()
                for size in (1, 2, 3, 8, 33, 128))
 
@@ -81,7 +92,7 @@ def main(sources: list[str]) -> None:
         net = load_policy_net(source) if source.endswith(".pt") else load_checkpoint_net(source)
         net = net.to(memory_format=torch.channels_last)
         moved = stepped(net)
-        full, half = log_probs(net, x, bf16=False), log_probs(net, x, bf16=True)
+        full, half = log_probs(net, x), log_probs(net, x, "bf16")
         rare = full < RARE_LOGP
         with torch.no_grad():
             logits = net(x)
@@ -90,9 +101,9 @@ def main(sources: list[str]) -> None:
               f"{spread.max():.1f}, share of actions below logp {RARE_LOGP:g}: "
               f"{rare.float().mean():.3f}")
         print(f"  |logp bf16 - fp32|: {summary((half - full).abs(), rare)}")
-        for name, bf16 in (("fp32", False), ("bf16", True)):
-            change = (log_probs(moved, x, bf16) - log_probs(net, x, bf16)).abs()
-            print(f"  one step, {name}: {summary(change, rare)}")
+        for precision in PRECISIONS:
+            change = (log_probs(moved, x, precision) - log_probs(net, x, precision)).abs()
+            print(f"  one step, {precision}: {summary(change, rare)}")
         print(f"  fp32 batch sizes 1-128 against all rows: max |logp| difference "
               f"{batch_size_error(net, x):.1e}")
 
