@@ -81,16 +81,19 @@ def _dual_clip(ppo: PPOSettings) -> dict:
     return {"learner_config_dict": {DUAL_CLIP_KEY: ppo.dual_clip}} if ppo.dual_clip < inf else {}
 
 
-def check_weights(path: Path, num_outputs: int = NUM_ACTIONS) -> Path:
+PI_WEIGHTS_HINT = ("imitation weights", "train them with `python -m rllib_pommer.imitate`, set "
+                   "pi_weights in the curriculum file, or pass --pi-weights")
+VF_WEIGHTS_HINT = ("vf_weights", "the curriculum file names it")
+
+
+def check_weights(path: Path, num_outputs: int = NUM_ACTIONS,
+                  hint: tuple[str, str] = PI_WEIGHTS_HINT) -> Path:
     """The weights file, resolved, once it has loaded into a PommerNet (`num_outputs=1`: a value
     network): a missing, cut short or foreign file is named here, before Ray starts, not deep
-    inside a Ray actor."""
+    inside a Ray actor. `hint`: what the file is and where it comes from, for the error."""
     if not Path(path).is_file():
-        raise ValueError(
-            f"imitation weights not found: {path} (train them with `python -m "
-            f"rllib_pommer.imitate`, set pi_weights in the curriculum file, or pass --pi-weights)"
-            if num_outputs == NUM_ACTIONS else
-            f"vf_weights not found: {path} (the curriculum file names it)")
+        what, source = hint
+        raise ValueError(f"{what} not found: {path} ({source})")
     load_policy_net(path, num_outputs)
     return Path(path).resolve()
 
@@ -113,7 +116,7 @@ def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None
     vf_weights = curriculum.vf_weights  # a property that parses the file: read it once
     if vf_weights:  # only then: a run under way resumes with the keys it started with
         model_config["vf_weights"] = str(vf_weights if restoring else check_weights(
-            vf_weights, num_outputs=1))
+            vf_weights, num_outputs=1, hint=VF_WEIGHTS_HINT))
     modules = {LEARNER: RLModuleSpec(module_class=PommerPPOModule, model_config=model_config)}
     modules |= {name: fixed_module_spec(name) for name in curriculum.policies()}
     return (
