@@ -6,7 +6,9 @@ run has moved on or is gone:
 
 - `source.json` (written by `rl/checkpoint_policy.export_policy`): the run, trial and checkpoint
   it came from, the checkpoint's iteration, the curriculum (name, description, every stage), the
-  commit it was exported at and the commits that packed the run;
+  commit it was exported at and the commits that packed the run; optionally `chosen`, a person's
+  reason for shipping this checkpoint rather than the run's end (say, the last one before a
+  collapse), which the card states instead of "training goes on";
 - `history/<run>/progress.csv`: the run's summary rows up to that checkpoint (`viz/training.py`),
   which give Fig. 3 and the stage table;
 - optionally `NOTES.md`: words of a person, kept as they are under "Notes".
@@ -84,9 +86,14 @@ def _preface(policy_dir: Path, source: dict) -> list[str]:
     games = int(number(row.get("env_runners/num_episodes_lifetime")))
     hours = number(row.get("time_total_s")) / 3600
     finished = games >= total
-    status = ("the whole curriculum" if finished else
-              f"**{games / total:.0%} of the curriculum: training goes on**, and this card and "
-              f"the weights are replaced as it does")
+    if finished:
+        status = "the whole curriculum"
+    elif source.get("chosen"):
+        status = f"**{games / total:.0%} of the curriculum, chosen over the run's end**: " \
+                 f"{source['chosen']}"
+    else:
+        status = (f"**{games / total:.0%} of the curriculum: training goes on**, and this card "
+                  f"and the weights are replaced as it does")
     commits = source["run_commits"]
     steps = int(number(row.get("env_runners/num_env_steps_sampled_lifetime")))
     title = curriculum["description"].rstrip(".")

@@ -133,6 +133,19 @@ def test_report_card_adds_the_results_and_keeps_notes(tmp_path, capsys):
     assert "record files only" in capsys.readouterr().err
 
 
+def test_a_chosen_checkpoint_says_why_instead_of_training_goes_on(tmp_path):
+    _fake_run(tmp_path / "run", PommerNet())
+    target = tmp_path / "ppo"
+    assert main(["--out", str(tmp_path / "run"), "--export", str(target)]) == 0
+    assert "training goes on" in (target / "MODEL_CARD.md").read_text()
+    source = json.loads((target / "source.json").read_text())
+    (target / "source.json").write_text(json.dumps({**source, "chosen": "the last healthy one"}))
+    assert report(["--card", str(target)]) == 0
+    card = (target / "MODEL_CARD.md").read_text()
+    assert "chosen over the run's end**: the last healthy one" in card
+    assert "training goes on" not in card
+
+
 def test_the_card_names_the_shipped_policy_pi_started_from(tmp_path):
     """pi at the end of the frozen warm-up is pi as the run began: the shipped policy with those
     weights is named, and a start that matches none is not."""
