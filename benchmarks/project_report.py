@@ -24,7 +24,7 @@ from rllib_pommer.viz.report import write_report
 REPO = Path(__file__).resolve().parents[1]
 REPORT = Path("docs/report")
 REPLAYS = Path("build/report_replays")
-FIG5_TEAMS = ("ppo", "ppo_cautious")
+FIG5_TEAMS = ("ppo", "ppo_cautious", "ppo_team")
 FIG5_OPPONENTS = ("simple", "simple_nobomb", "static")  # the first game of the first is shown
 FIG5_GAMES = 50
 
