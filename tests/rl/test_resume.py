@@ -53,7 +53,7 @@ def test_resume_after_sigkill(tmp_path, pi_weights):
     try:
         _wait_for(lambda: list(out.glob("*/checkpoint_000000")), process, 240, "a checkpoint")
         (experiment_state,) = out.glob("experiment_state-*.json")
-        behind = experiment_state.read_bytes()  # names no checkpoint, or the first one
+        behind = _whole_json(experiment_state, process)  # names no checkpoint, or the first one
         _wait_for(lambda: list(out.glob("*/checkpoint_000001")), process, 240,
                   "a second checkpoint")
         time.sleep(1.0)
@@ -113,6 +113,24 @@ def test_resume_after_sigkill(tmp_path, pi_weights):
 
 def _iteration(row) -> int:
     return int(float(row["training_iteration"]))
+
+
+def _whole_json(path: Path, process) -> bytes:
+    """`path`'s bytes once they parse: Tune may be writing the file as it is read (on a loaded
+    machine the test once kept a cut-short copy, which the resume then rightly refused)."""
+    copy = b""
+
+    def parses() -> bool:
+        nonlocal copy
+        copy = path.read_bytes()
+        try:
+            json.loads(copy)
+        except ValueError:  # empty or cut short
+            return False
+        return True
+
+    _wait_for(parses, process, 30, f"{path.name} written whole")
+    return copy
 
 
 def _wait_for(predicate, process, seconds: float, what: str) -> None:
