@@ -58,9 +58,9 @@ from ray.rllib.algorithms.ppo import PPOConfig
 from ray.rllib.core.rl_module.multi_rl_module import MultiRLModuleSpec
 from ray.rllib.core.rl_module.rl_module import RLModuleSpec
 
-from ..game.constants import NUM_ACTIONS
 from ..imitation.learned import load_policy_net
 from .callbacks import CurriculumCallback
+from .checkpoint_policy import NET_OUTPUTS
 from .connectors import LearnerFilters
 from .curriculum import Curriculum
 from .env import ENV_NAME
@@ -81,20 +81,22 @@ def _dual_clip(ppo: PPOSettings) -> dict:
     return {"learner_config_dict": {DUAL_CLIP_KEY: ppo.dual_clip}} if ppo.dual_clip < inf else {}
 
 
-PI_WEIGHTS_HINT = ("imitation weights", "train them with `python -m rllib_pommer.imitate`, set "
-                   "pi_weights in the curriculum file, or pass --pi-weights")
-VF_WEIGHTS_HINT = ("vf_weights", "the curriculum file names it")
+# what each of the learner's weights files is, and where it comes from, for check_weights' error
+WEIGHTS_HINTS = {
+    "pi": ("imitation weights", "train them with `python -m rllib_pommer.imitate`, set "
+                                "pi_weights in the curriculum file, or pass --pi-weights"),
+    "vf": ("vf_weights", "the curriculum file names it"),
+}
 
 
-def check_weights(path: Path, num_outputs: int = NUM_ACTIONS,
-                  hint: tuple[str, str] = PI_WEIGHTS_HINT) -> Path:
-    """The weights file, resolved, once it has loaded into a PommerNet (`num_outputs=1`: a value
-    network): a missing, cut short or foreign file is named here, before Ray starts, not deep
-    inside a Ray actor. `hint`: what the file is and where it comes from, for the error."""
+def check_weights(path: Path, part: str = "pi") -> Path:
+    """The weights file of the learner's `part` ("pi" or "vf", checkpoint_policy.NET_OUTPUTS),
+    resolved, once it has loaded into a PommerNet: a missing, cut short or foreign file is named
+    here, before Ray starts, not deep inside a Ray actor."""
     if not Path(path).is_file():
-        what, source = hint
+        what, source = WEIGHTS_HINTS[part]
         raise ValueError(f"{what} not found: {path} ({source})")
-    load_policy_net(path, num_outputs)
+    load_policy_net(path, NET_OUTPUTS[part])
     return Path(path).resolve()
 
 
@@ -116,7 +118,7 @@ def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None
     vf_weights = curriculum.vf_weights  # a property that parses the file: read it once
     if vf_weights:  # only then: a run under way resumes with the keys it started with
         model_config["vf_weights"] = str(vf_weights if restoring else check_weights(
-            vf_weights, num_outputs=1, hint=VF_WEIGHTS_HINT))
+            vf_weights, part="vf"))
     modules = {LEARNER: RLModuleSpec(module_class=PommerPPOModule, model_config=model_config)}
     modules |= {name: fixed_module_spec(name) for name in curriculum.policies()}
     return (

@@ -89,8 +89,8 @@ def _preface(policy_dir: Path, source: dict) -> list[str]:
     if finished:
         status = "the whole curriculum"
     elif source.get("chosen"):
-        status = f"**{games / total:.0%} of the curriculum, chosen over the run's end**: " \
-                 f"{source['chosen']}"
+        status = (f"**{games / total:.0%} of the curriculum, chosen over the run's end**: "
+                  f"{source['chosen']}")
     else:
         status = (f"**{games / total:.0%} of the curriculum: training goes on**, and this card "
                   f"and the weights are replaced as it does")
