@@ -119,3 +119,66 @@ def test_stepping_after_the_agents_episode_is_an_error():
         env.step(0)
     with pytest.raises(ValueError, match="call reset"):
         env.step(0)
+
+
+def _gym_step(action):
+    env = PommeTeamEnv(teammate="static", opponents="static")
+    env.reset(seed=0)
+    return env.step(action)
+
+
+def _pz_step(actions, reset: bool = True):
+    env = parallel_env()
+    if reset:
+        env.reset(seed=0)
+    return env.step(actions)
+
+
+def _pz_step_after_death():
+    """player_0 lays a bomb and stays: it dies; an action for it afterwards is refused."""
+    env = parallel_env(seed=0)
+    env.reset(seed=0)
+    env.step({name: 5 if name == "player_0" else 0 for name in env.agents})
+    while "player_0" in env.agents:
+        env.step(dict.fromkeys(env.agents, 0))
+    return env.step(dict.fromkeys(["player_0", *env.agents], 0))
+
+
+# What the spaces refuse, the envs refuse: one row per case of issue 40 (9 and 10).
+@pytest.mark.parametrize(("call", "message"), [
+    (lambda: _gym_step(2.7), r"action of agent 0: 2.7 is not in Discrete\(6\)"),
+    (lambda: _gym_step(4.99), r"action of agent 0: 4.99 is not in Discrete\(6\)"),
+    (lambda: _gym_step("5"), r"action of agent 0: '5' is not in Discrete\(6\)"),
+    (lambda: _gym_step(np.array([1])), r"action of agent 0: array\(\[1\]\) is not in"),
+    (lambda: _gym_step(None), r"action of agent 0: None is not in Discrete\(6\)"),
+    (lambda: _gym_step(6), r"action of agent 0: 6 is not in Discrete\(6\)"),
+    (lambda: PommeTeamEnv(max_steps=0), "max_steps must be an integer >= 1, got 0"),
+    (lambda: PommeTeamEnv(max_steps=-1), "max_steps must be an integer >= 1, got -1"),
+    (lambda: PommeTeamEnv(max_steps=1.5), "max_steps must be an integer >= 1, got 1.5"),
+    (lambda: _pz_step({"player_0": 1}),
+     r"no action for \['player_1', 'player_2', 'player_3'\] \(every live agent acts\)"),
+    (lambda: _pz_step({}), r"no action for \['player_0', 'player_1', 'player_2', 'player_3'\]"),
+    (lambda: _pz_step({"player_0": 1}, reset=False), r"no live agents \(call reset\(\) first"),
+    (lambda: _pz_step({"player_9": 1}), "agent 'player_9' is unknown; live agents"),
+    (lambda: _pz_step({0: 1}), "agent 0 is unknown; live agents"),
+    (_pz_step_after_death, "agent 'player_0' is not live"),
+    (lambda: _pz_step({f"player_{a}": 4.9 for a in range(4)}),
+     r"action of agent 'player_0': 4.9 is not in Discrete\(6\)"),
+    (lambda: parallel_env(max_steps=0), "max_steps must be an integer >= 1, got 0"),
+    (lambda: parallel_env(maxsteps=5), r"unknown config key\(s\) \['maxsteps'\]; valid"),
+])
+def test_the_envs_refuse_what_their_spaces_refuse(call, message):
+    with pytest.raises(ValueError, match=message):
+        call()
+
+
+def test_a_refused_action_moves_nothing():
+    """The other seats have not acted (nor drawn from their streams) when an action is refused."""
+    env, same = PommeTeamEnv(), PommeTeamEnv()
+    env.reset(seed=5)
+    same.reset(seed=5)
+    with pytest.raises(ValueError):
+        env.step(2.7)
+    trace = [env.step(a)[0] for a in (1, 2, 3)]
+    assert _same(trace, [same.step(a)[0] for a in (1, 2, 3)])
+    assert env.step(np.int64(2))[0].shape == env.observation_space.shape  # numpy ints are actions

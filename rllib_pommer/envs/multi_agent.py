@@ -2,8 +2,11 @@
 
 Same game, observations, rewards and seeding as the RLlib env (both are `team.MultiAgentTeam`);
 agents are named "player_0".."player_3" (PettingZoo convention), and an agent that dies leaves
-`agents` after its last step, as in PettingZoo's parallel API. Observations default to the 19
-planes as a Box (config `observation` picks another form, `team.OBSERVATIONS`).
+`agents` after its last step, as in PettingZoo's parallel API. As there, `step` takes an action for
+every live agent and no other: a missing, unknown or departed agent, a step before `reset`, an
+action outside the action space or an unknown config key is a ValueError naming it.
+Observations default to the 19 planes as a Box (config `observation` picks another form,
+`team.OBSERVATIONS`).
 """
 
 from __future__ import annotations
@@ -13,7 +16,14 @@ from copy import deepcopy
 import gymnasium as gym
 from pettingzoo import ParallelEnv
 
-from .team import ACTION_SPACE, RENDER_MODES, MultiAgentTeam, check_render_mode
+from .team import (
+    ACTION_SPACE,
+    CONFIG_KEYS,
+    RENDER_MODES,
+    MultiAgentTeam,
+    check_action,
+    check_render_mode,
+)
 
 
 def _name(agent: int) -> str:
@@ -31,6 +41,9 @@ class PommeParallelEnv(ParallelEnv):
 
     def __init__(self, config: dict | None = None, render_mode: str | None = None):
         self.render_mode = check_render_mode(render_mode)
+        unknown = sorted(set(config or {}) - set(CONFIG_KEYS))
+        if unknown:
+            raise ValueError(f"unknown config key(s) {unknown}; valid: {list(CONFIG_KEYS)}")
         self.env = MultiAgentTeam({"observation": "planes", **(config or {})})
         self.possible_agents = [_name(a) for a in self.env.possible_agents]
         self._ids = {_name(a): a for a in self.env.possible_agents}
@@ -52,8 +65,19 @@ class PommeParallelEnv(ParallelEnv):
         return self._named(obs), self._named(infos)
 
     def step(self, actions):
+        if not self.agents:
+            raise ValueError("step: no live agents (call reset() first, or again after the "
+                             "episode ended)")
+        unknown = [name for name in actions if name not in self.agents]
+        if unknown:
+            what = "not live (left the game)" if unknown[0] in self._ids else "unknown"
+            raise ValueError(f"step: agent {unknown[0]!r} is {what}; live agents: {self.agents}")
+        missing = [name for name in self.agents if name not in actions]
+        if missing:
+            raise ValueError(f"step: no action for {missing} (every live agent acts); "
+                             f"live agents: {self.agents}")
         obs, rewards, terminateds, truncateds, infos = self.env.step(
-            {self._ids[name]: action for name, action in actions.items()})
+            {self._ids[name]: check_action(action, name) for name, action in actions.items()})
         acted = [self._ids[name] for name in self.agents]
         self.agents = [_name(a) for a in self.env.agents]
         return (self._named(obs), self._named(rewards), self._named(terminateds),

@@ -25,7 +25,7 @@ import gymnasium as gym
 
 from ..agents.registry import make_agent
 from ..game.constants import NUM_AGENTS, TEAM_PRESET
-from .team import ACTION_SPACE, RENDER_MODES, MultiAgentTeam, check_render_mode
+from .team import ACTION_SPACE, RENDER_MODES, MultiAgentTeam, check_action, check_render_mode
 
 ENV_ID = "rllib_pommer/PommeTeam-v0"
 
@@ -67,7 +67,7 @@ class PommeTeamEnv(gym.Env):
         if self.seat not in self.team.agents:
             raise ValueError("step: the trained agent's episode is over; call reset()")
         rows = self.team.last_observation
-        actions = {self.seat: action}
+        actions = {self.seat: check_action(action, self.seat)}  # before the others act
         actions |= {s: agent.act(rows.select(s)) for s, agent in self.others.items()
                     if s in self.team.agents}
         obs, rewards, terminateds, _, infos = self.team.step(actions)

@@ -64,6 +64,27 @@ OBSERVATIONS: dict[str, tuple[gym.Space, Callable[[Observation], list]]] = {
 }
 
 
+# The config keys `MultiAgentTeam` reads: the PettingZoo env refuses others (a typo would pass).
+CONFIG_KEYS = ("seed", "max_steps", "reward", "observation", "action_filter", "jitter")
+
+
+def check_action(action, agent) -> int:
+    """`action` as an int if `ACTION_SPACE` contains it, else a ValueError naming `agent` and the
+    value: 2.7, "5", None or a one-element array are not actions (an int64 cast would play 2, 5
+    or raise a numpy error)."""
+    if not ACTION_SPACE.contains(action):
+        raise ValueError(f"action of agent {agent!r}: {action!r} is not in {ACTION_SPACE} "
+                         f"(an integer 0..{NUM_ACTIONS - 1})")
+    return int(action)
+
+
+def check_max_steps(value) -> int:
+    """`value` if it is a whole number of steps >= 1, else a ValueError naming it."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise ValueError(f"max_steps must be an integer >= 1, got {value!r}")
+    return int(value)
+
+
 def check_render_mode(render_mode: str | None) -> str | None:
     """`render_mode` if the PettingZoo and Gymnasium envs can draw it, else a ValueError."""
     if render_mode is not None and render_mode not in RENDER_MODES:
@@ -88,7 +109,7 @@ class MultiAgentTeam:
     def __init__(self, config: dict | None = None):
         super().__init__()  # rl/env.PommeEnv puts RLlib's MultiAgentEnv next in line
         config = dict(config or {})
-        max_steps = int(config.get("max_steps", TEAM_PRESET.max_steps))
+        max_steps = check_max_steps(config.get("max_steps", TEAM_PRESET.max_steps))
         self.game = Game(replace(TEAM_PRESET, max_steps=max_steps))
         self.observation_form = config.get("observation", "dict")
         if self.observation_form not in OBSERVATIONS:
@@ -121,9 +142,14 @@ class MultiAgentTeam:
         return observations, {a: {"filters": self._filters} for a in self.agents}
 
     def step(self, action_dict):
-        actions = np.zeros(NUM_AGENTS, np.int64)  # dead agents play Stop, as in the engine
+        """One step of every agent: `action_dict` maps seats to actions; a seat left out (a
+        dead agent) plays Stop, as in the engine. An action the space refuses is a ValueError
+        before anything moves."""
+        actions = np.zeros(NUM_AGENTS, np.int64)
         for agent, action in action_dict.items():
-            actions[agent] = action
+            if agent not in self.possible_agents:
+                raise ValueError(f"unknown agent {agent!r}; agents: {self.possible_agents}")
+            actions[agent] = check_action(action, agent)
         obs, engine_rewards, done, info = self.game.step(actions)
         self.last_observation = obs
         alive = self.game.batch.alive[0]
