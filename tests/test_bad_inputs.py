@@ -15,7 +15,7 @@ import pyarrow.parquet as pq
 import pytest
 import tomllib
 
-from rllib_pommer import collect, imitate, replay, serve
+from rllib_pommer import collect, imitate, replay, report, serve
 from rllib_pommer.data.collector import Collection
 from rllib_pommer.data.schema import SHARD_KEY
 from rllib_pommer.game.records import write_games
@@ -73,6 +73,23 @@ def _retagged_shards(tmp: Path, shards: Path, metadata: bytes) -> Path:
             table = table.replace_schema_metadata({**table.schema.metadata, SHARD_KEY: metadata})
         pq.write_table(table, out / shard.name)
     return out
+
+
+def _json_file(tmp: Path, value) -> Path:
+    path = tmp / "stats.json"
+    path.write_text(json.dumps(value))
+    return path
+
+
+def _records(tmp: Path, lines: list[str], name: str = "static__vs__simple.jsonl") -> Path:
+    """An arena records file of these lines."""
+    path = tmp / name
+    path.write_text("".join(line + "\n" for line in lines))
+    return path
+
+
+ROW = json.dumps({"game": 0, "seed": 0, "seats_a": [0, 2], "result": "win", "team": "static",
+                  "vs": "simple", "filters": []})
 
 
 def _a_file(tmp: Path) -> Path:
@@ -164,6 +181,25 @@ CASES = [
     ("imitate --out under a file", imitate,
      lambda t, r, s: ["--data", str(s), "--out", str(_a_file(t) / "p")],
      "a_file is a file, not a folder"),
+    # issue 40
+    ("replay agree --decisions a file of other statistics", replay,
+     lambda t, r, s: ["agree", str(PUBLIC_GAMES), "--decisions",
+                      str(_json_file(t, {"games": 5, "wins": 3}))],
+     "stats.json: not a decisions file (it needs 'rows' and 'mean_agreement'"),
+    ("replay agree --decisions with rows of another kind", replay,
+     lambda t, r, s: ["agree", str(PUBLIC_GAMES), "--decisions",
+                      str(_json_file(t, {"rows": [{"game": 1}], "mean_agreement": 0.5}))],
+     "stats.json: rows[0] is not a decisions row"),
+    ("report on records whose rows appear twice", report,
+     lambda t, r, s: ["--out", str(t / "r"), str(_records(t, [ROW, ROW]))],
+     "static__vs__simple.jsonl: game 0 (seed 0) of static vs simple appears twice"),
+    ("report on a records file given twice", report,
+     lambda t, r, s: ["--out", str(t / "r"), str(_records(t, [ROW])),
+                      str(_records(t, [ROW], "copy.jsonl"))],
+     "copy.jsonl: game 0 (seed 0) of static vs simple appears twice (also in"),
+    ("report on a damaged records line", report,
+     lambda t, r, s: ["--out", str(t / "r"), str(_records(t, [ROW, ROW[:30]]))],
+     "static__vs__simple.jsonl:2: not a JSON row"),
     ("serve --port 70000", serve, lambda t, r, s: ["--policy", "static", "--port", "70000"],
      "--port must be in 0..65535, got 70000"),
 ]

@@ -11,7 +11,6 @@ decision where all 8 did ("stable"), and overall about as often as the reference
 
 from __future__ import annotations
 
-import gzip
 import json
 from collections.abc import Iterator
 from pathlib import Path
@@ -20,6 +19,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..game.constants import Item
+from ..game.records import open_text
 from ..game.serialize import load_observation
 from .registry import make_agent
 
@@ -45,11 +45,15 @@ def format_line(result: AgreementResult) -> str:
 def _games(games_path: Path, wanted: set[int]) -> Iterator[tuple[int, dict]]:
     """(line index, game) for the wanted lines only, streamed; other lines are never parsed."""
     remaining = set(wanted)
-    with gzip.open(games_path, "rt", encoding="utf-8") as lines:
+    with open_text(games_path, "r") as lines:
         for index, line in enumerate(lines):
             if index in remaining:
                 remaining.discard(index)
-                yield index, json.loads(line)
+                try:
+                    yield index, json.loads(line)
+                except json.JSONDecodeError as exc:
+                    raise ValueError(f"{games_path}:{index + 1}: not a game record "
+                                     f"({exc.msg})") from None
             if not remaining:
                 return
     raise ValueError(f"{games_path}: no game_index {min(remaining)} (the file is shorter)")
@@ -90,13 +94,33 @@ def _seat_agreement(game: dict, game_index: int, row: dict,
     return agreed, stable_agreed, stable
 
 
+DECISION_KEYS = ("game_index", "agent_id", "seed", "agree_of_8")
+
+
+def _decisions(path: Path) -> dict:
+    """The decisions file (tests/reference/simpleagent_decisions_public.json's layout), checked:
+    a file of another kind is a ValueError naming it and what it lacks."""
+    try:
+        decisions = json.loads(path.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ValueError(f"{path}: not a decisions file (not JSON: {exc})") from None
+    if not isinstance(decisions, dict) or not {"rows", "mean_agreement"} <= set(decisions):
+        raise ValueError(f"{path}: not a decisions file (it needs 'rows' and 'mean_agreement', "
+                         f"as tests/reference/simpleagent_decisions_public.json has)")
+    for i, row in enumerate(decisions["rows"] if isinstance(decisions["rows"], list) else [0]):
+        if not isinstance(row, dict) or not set(DECISION_KEYS) <= set(row):
+            raise ValueError(f"{path}: rows[{i}] is not a decisions row (keys "
+                             f"{list(DECISION_KEYS)})")
+    return decisions
+
+
 def measure_agreement(games_path: str | Path, decisions_path: str | Path,
                       policy: str = "simple") -> AgreementResult:
     """Replay every SimpleAgent seat of the decisions file through a fresh agent of `policy`.
 
     Each seat's agent is seeded from (game seed, agent id), so the result is reproducible.
     """
-    decisions = json.loads(Path(decisions_path).read_text(encoding="utf-8"))
+    decisions = _decisions(Path(decisions_path))
     rows_by_game: dict[int, list[dict]] = {}
     for row in decisions["rows"]:
         rows_by_game.setdefault(row["game_index"], []).append(row)

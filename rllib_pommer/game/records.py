@@ -18,7 +18,8 @@ from .engine import Games, info_dict
 from .serialize import dump_observation
 
 
-def _open(path: Path, mode: str):
+def open_text(path: Path, mode: str):
+    """A .jsonl file, or a .jsonl.gz one through gzip, opened as text for `mode` ("r", "w")."""
     return gzip.open(path, mode + "t") if path.suffix == ".gz" else open(path, mode)
 
 
@@ -52,7 +53,7 @@ def _numbered(path: str | Path) -> Iterator[tuple[int, object]]:
         raise ValueError(f"{path}: no such file")
     line_no = 0
     try:
-        with _open(path, "r") as f:
+        with open_text(path, "r") as f:
             for line_no, line in enumerate(f, 1):
                 if not line.strip():
                     continue
@@ -81,7 +82,7 @@ def write_games(path: str | Path, records: Iterable[dict]) -> int:
     """Write records as JSON Lines (gzip if the name ends in .gz); return how many."""
     path = Path(path)
     count = 0
-    with _open(path, "w") as f:
+    with open_text(path, "w") as f:
         for record in records:
             f.write(json.dumps(record, separators=(",", ":")) + "\n")
             count += 1

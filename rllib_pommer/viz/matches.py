@@ -60,11 +60,25 @@ class Outcomes:
 
 
 def read_rows(path: Path) -> list[dict]:
-    """Rows of a .jsonl or .csv records file (list columns of a .csv are JSON text)."""
+    """Rows of a .jsonl or .csv records file (list columns of a .csv are JSON text); a line that
+    is not a JSON object is a ValueError naming the file and line."""
     with open(path, newline="") as f:
         if path.suffix == ".csv":
             return list(csv.DictReader(f))
-        return [json.loads(line) for line in f if line.strip()]
+        rows = []
+        for line_no, line in enumerate(f, 1):
+            if not line.strip():
+                continue
+            try:
+                row = json.loads(line)
+            except json.JSONDecodeError as exc:
+                raise ValueError(f"{path}:{line_no}: not a JSON row ({exc.msg}, column "
+                                 f"{exc.colno}); damaged or cut short?") from None
+            if not isinstance(row, dict):
+                raise ValueError(f"{path}:{line_no}: a records row is a JSON object, got "
+                                 f"{type(row).__name__}")
+            rows.append(row)
+        return rows
 
 
 def variant_of(team: str, filters: Iterable[str]) -> tuple[str, str]:
@@ -121,10 +135,22 @@ def match_of(path: Path, rows: list[dict] | None = None) -> Match:
 def load_outcomes(paths: Iterable[Path]) -> dict[Match, Outcomes]:
     """Team A's results per match, over all the files of each match."""
     results: dict[Match, Outcomes] = {}
+    # A game is its match, match seed, game index and seats: (seed, index) deal the board and
+    # every random stream (arena/match.py), so a second row of it is the same game again. Rows
+    # without a seed (older files) are compared within their file only.
+    seen: dict[tuple, Path] = {}
     for path in paths:
         rows = read_rows(path)
-        outcomes = results.setdefault(match_of(path, rows), Outcomes())
+        match = match_of(path, rows)
+        outcomes = results.setdefault(match, Outcomes())
         for row in rows:
+            game = (match, str(row.get("game")), str(row.get("seed", path)),
+                    str(row.get("seats_a")))
+            if game in seen:
+                raise ValueError(f"{path}: game {game[1]} (seed {game[2]}) of {match.team} vs "
+                                 f"{match.vs} appears twice (also in {seen[game]}); each game "
+                                 f"counts once: remove the duplicated rows or files")
+            seen[game] = path
             if row["result"] not in ("win", "loss", "tie"):
                 raise ValueError(f"{path}: result {row['result']!r} is not win, loss or tie")
             setattr(outcomes, row["result"], getattr(outcomes, row["result"]) + 1)

@@ -60,3 +60,20 @@ def test_any_policy_is_measured_by_the_same_ruler(tmp_path):
     static = measure_agreement(GAMES, DECISIONS, policy="static")
     assert static.decisions == simple.decisions
     assert 0.05 < static.agreement < 0.5 < simple.agreement
+
+
+def test_a_plain_jsonl_replay_agrees_as_its_gzipped_copy(tmp_path):
+    """`replay verify` reads .jsonl and .jsonl.gz; so does `replay agree` (issue 40, case 15)."""
+    with gzip.open(GAMES, "rt", encoding="utf-8") as lines:
+        first_two = [lines.readline() for _ in range(2)]
+    plain, packed = tmp_path / "games.jsonl", tmp_path / "games.jsonl.gz"
+    plain.write_text("".join(first_two))
+    with gzip.open(packed, "wt", encoding="utf-8") as out:
+        out.write("".join(first_two))
+    all_rows = json.loads(DECISIONS.read_text())
+    decisions = tmp_path / "decisions.json"
+    decisions.write_text(json.dumps({**all_rows, "rows": [row for row in all_rows["rows"]
+                                                          if row["game_index"] < 2]}))
+    from_plain = measure_agreement(plain, decisions)
+    assert from_plain.decisions > 100
+    assert from_plain == measure_agreement(packed, decisions)
