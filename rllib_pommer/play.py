@@ -9,7 +9,9 @@ keys move, space lays a bomb, any other key plays Stop, and so does no key withi
 
 The game ends with its result, or as a forfeit when the page is closed (or the command is
 stopped); either way it is saved as a replay (`--out`, default play-<time>.jsonl.gz) for
-`python -m rllib_pommer.replay html|render|verify`, and the command exits. Only one page can hold
+`python -m rllib_pommer.replay html|render|verify`, and the command exits. Should `--out` fail
+at the end (a full disk, a folder deleted meanwhile), the game goes to a new file in the system's
+temporary folder, whose path is printed. Only one page can hold
 the game: a second one is refused.
 """
 
@@ -84,7 +86,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {error}", file=sys.stderr)
     if not table.saved:
         return 1
-    print(f"replay saved to {out}: python -m rllib_pommer.replay html {out} --out game.html")
+    print(f"replay saved to {table.saved}: python -m rllib_pommer.replay html {table.saved} "
+          f"--out game.html")
     return 1 if table.errors else 0
 
 

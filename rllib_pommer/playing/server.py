@@ -29,8 +29,10 @@ import asyncio
 import contextlib
 import json
 import math
+import os
 import secrets
 import signal
+import tempfile
 from collections.abc import Awaitable, Callable
 from pathlib import Path
 from typing import Any
@@ -265,11 +267,14 @@ class Table:
         await self._finish()
 
     async def _finish(self) -> None:
+        record = self.game.record()
         try:
-            await asyncio.to_thread(write_games, self.out, [self.game.record()])
+            await asyncio.to_thread(write_games, self.out, [record])
             self.saved = self.out
-        except OSError as exc:
-            self.errors.append(f"could not write the replay to {self.out}: {exc}")
+        except OSError as exc:  # a full disk, a folder gone: the game goes to a fallback file
+            self.saved = await asyncio.to_thread(_write_fallback, self.out, record)
+            kept = f"saved it to {self.saved} instead" if self.saved else "no fallback either"
+            self.errors.append(f"could not write the replay to {self.out} ({exc}); {kept}")
         await self.send({"type": "over", **self.game.view(), **self.settings(),
                           "replay": str(self.saved) if self.saved else None,
                           "error": "; ".join(self.errors) or None})
@@ -284,6 +289,20 @@ class Table:
                 "over": self.game.over, "result": self.game.result(),
                 "forfeit": self.game.forfeit, "stopped": self.game.stopped, **self.settings(),
                 "replay": str(self.saved) if self.saved else None}
+
+
+def _write_fallback(out: Path, record: dict) -> Path | None:
+    """The replay written to a new file in the system's temporary folder, named after `out`,
+    when `out` could not be written; None if that fails too."""
+    name = out.name or "play.jsonl.gz"
+    suffix = ".jsonl.gz" if name.endswith(".gz") else ".jsonl"
+    try:
+        handle, path = tempfile.mkstemp(prefix=f"{name.split('.')[0]}-", suffix=suffix)
+        os.close(handle)
+        write_games(path, [record])
+    except OSError:
+        return None
+    return Path(path)
 
 
 TABLE = web.AppKey("table", Table)

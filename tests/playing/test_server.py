@@ -5,13 +5,15 @@ game, and a closed page that does not come back forfeits with a replay that veri
 from __future__ import annotations
 
 import asyncio
+from pathlib import Path
 
+import pytest
 from aiohttp import web
 
 from rllib_pommer.game.constants import Action
 from rllib_pommer.game.records import read_games
 from rllib_pommer.game.verify import verify_games
-from rllib_pommer.playing.server import MAX_BODY_BYTES, TOKEN_HEADER
+from rllib_pommer.playing.server import MAX_BODY_BYTES, TABLE, TOKEN_HEADER
 from rllib_pommer.playing.session import PlaySpec
 
 from ..serving.conftest import http_policy
@@ -275,3 +277,76 @@ def test_a_failing_agent_stops_the_game_which_is_saved_and_told(serve, tmp_path)
     assert "answered /action with" in over["error"]
     (record,) = read_games(out)
     assert record["stopped"]["step"] == 0 and record["num_steps"] == 0
+
+
+def test_a_replay_that_cannot_be_written_is_saved_to_a_printed_fallback(tmp_path):
+    """The --out folder passed the up-front check, then went away mid-game (issue 40, case 1):
+    the game is kept in a fallback file, which the table and the page name."""
+    folder = tmp_path / "replays"
+    folder.mkdir()
+    out = folder / "game.jsonl.gz"
+
+    async def scenario(client, table):
+        seat = await Seat.take(client)
+        await seat.move("left", 0)
+        folder.rmdir()
+        await seat.socket.close()
+        await asyncio.wait_for(table.done.wait(), 10)
+        return table.saved, table.errors
+
+    saved, errors = run_server(scenario, out)
+    try:
+        assert saved is not None and saved != out and saved.name.endswith(".jsonl.gz")
+        assert errors == [f"could not write the replay to {out} ([Errno 2] No such file or "
+                          f"directory: '{out}'); saved it to {saved} instead"]
+        (record,) = read_games(saved)
+        assert record["num_steps"] == 1 and verify_games([record]).mismatches == []
+    finally:
+        if saved is not None:
+            saved.unlink(missing_ok=True)
+
+
+def test_play_prints_where_the_fallback_replay_went(tmp_path, monkeypatch, capsys):
+    """The command's own lines: the replay's real place, and exit 1 for the failed write."""
+    import rllib_pommer.play as play
+
+    fallback = tmp_path / "fallback.jsonl.gz"
+
+    async def served(app, host, port, announce):
+        table = app[TABLE]
+        table.saved, table.errors = fallback, ["could not write the replay to x; saved it"]
+        return table
+
+    monkeypatch.setattr(play, "serve_game", served)
+    assert play.main(["--team", "static", "--vs", "static", "--out",
+                      str(tmp_path / "game.jsonl.gz")]) == 1
+    out = capsys.readouterr().out
+    assert f"replay saved to {fallback}: python -m rllib_pommer.replay html {fallback}" in out
+
+
+def test_a_replay_under_proc_goes_to_the_fallback(tmp_path):
+    """/proc passes the up-front check (os.access: writable), yet takes no file (issue 40)."""
+    from rllib_pommer.util.outputs import check_output
+
+    out = Path("/proc/game.jsonl")
+    if not out.parent.is_dir():
+        pytest.skip("no /proc here")
+    try:
+        check_output(out, "--out")
+    except ValueError:
+        pytest.skip("refused up front here (not root)")
+
+    async def scenario(client, table):
+        seat = await Seat.take(client)
+        await seat.socket.close()
+        await asyncio.wait_for(table.done.wait(), 10)
+        return table.saved
+
+    saved = run_server(scenario, out)
+    try:
+        assert saved is not None and saved.suffix == ".jsonl"
+        (record,) = read_games(saved)
+        assert record["num_steps"] == 0
+    finally:
+        if saved is not None:
+            saved.unlink(missing_ok=True)
