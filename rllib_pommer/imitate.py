@@ -4,6 +4,8 @@ Trains the paper's CNN on a dataset made by `python -m rllib_pommer.collect`, th
 the policy weights (`pi.pt`, a plain state_dict) and `metrics.json`, and beside OUT a policy file
 `<OUT name>.toml` (kind "learned") so the arena, training and serving find the policy by name.
 Training state and TensorBoard logs go to OUT/training/; re-running the same command resumes.
+A policy already in OUT (weights or policy file) that OUT/training/ did not make here, such as a
+shipped one, is never replaced without `--force`.
 """
 
 from __future__ import annotations
@@ -11,7 +13,13 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .imitation.bc import WEIGHTS_FILE, BCConfig, train, write_policy_file
+from .imitation.bc import (
+    WEIGHTS_FILE,
+    BCConfig,
+    check_not_replacing,
+    train,
+    write_policy_file,
+)
 from .util.cli_options import add_options, settings_from
 from .util.outputs import check_output_dir
 
@@ -29,10 +37,14 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m rllib_pommer.imitate", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     add_options(parser, BCConfig, _HELP)
+    parser.add_argument("--force", action="store_true",
+                        help="replace the policy already in --out (its weights and policy file)")
     args = parser.parse_args(argv)
     try:
         cfg = settings_from(BCConfig, args)
         check_output_dir(args.out, "--out")
+        if not args.force:
+            check_not_replacing(cfg)
         metrics = train(cfg)
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)

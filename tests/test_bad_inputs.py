@@ -182,6 +182,9 @@ CASES = [
      lambda t, r, s: ["--data", str(s), "--out", str(_a_file(t) / "p")],
      "a_file is a file, not a folder"),
     # issue 40
+    ("imitate --data a file", imitate,
+     lambda t, r, s: ["--data", str(_a_file(t)), "--out", str(t / "p")],
+     "a_file is a file, not a folder of shards"),
     ("replay agree --decisions a file of other statistics", replay,
      lambda t, r, s: ["agree", str(PUBLIC_GAMES), "--decisions",
                       str(_json_file(t, {"games": 5, "wins": 3}))],

@@ -141,3 +141,31 @@ def test_fewer_draws_subsample_each_rows_draws_without_replacement():
     assert (picked <= counts).all() and (picked[:, 0, 0] == 4).all()
     assert abs(picked[:, 1, 0].mean() - 2.0) < 0.1  # half of 4 from an even split
     assert np.array_equal(picked[:, 3], np.broadcast_to(counts[3], (2000, 6)))
+
+
+def test_imitate_never_replaces_a_policy_it_did_not_train_without_force(dataset, tmp_path,
+                                                                        capsys):
+    """A shipped policy's folder given as --out (issue 40, case 2): refused, nothing touched;
+    --force replaces it; a re-run of the command that trained it resumes without --force."""
+    from rllib_pommer.imitate import main
+
+    shipped = tmp_path / "policies" / "imitation_v1"
+    shipped.mkdir(parents=True)
+    torch.save(PommerNet().state_dict(), shipped / "pi.pt")
+    (shipped / "metrics.json").write_text("{}")
+    write_policy_file(shipped, "the shipped clone")
+    before = {p.name: p.read_bytes() for p in (shipped / "pi.pt", shipped / "metrics.json",
+                                               shipped.with_suffix(".toml"))}
+    args = ["--data", str(dataset), "--out", str(shipped), "--max-batches-per-epoch", "2",
+            "--batch-size", "64", "--threads", "1", "--val-fraction", "0.25"]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert err.strip() == (f"error: --out {shipped}: {shipped / 'pi.pt'} exists (a policy not "
+                           f"trained here); pass --force to replace it, or choose another --out")
+    assert {p.name: p.read_bytes() for p in (shipped / "pi.pt", shipped / "metrics.json",
+                                             shipped.with_suffix(".toml"))} == before
+    (shipped / "pi.pt").unlink()  # the policy file alone is a policy too
+    assert main(args) == 2 and "imitation_v1.toml exists" in capsys.readouterr().err
+    assert main([*args, "--force"]) == 0
+    assert "Behaviour cloning" in shipped.with_suffix(".toml").read_text()
+    assert main(args) == 0  # its own training state: a re-run resumes

@@ -167,6 +167,9 @@ def open_dataset(*data_dirs: str | Path) -> Dataset:
         raise ValueError("no dataset directory given")
     paths = []
     for data_dir in map(Path, data_dirs):
+        if data_dir.exists() and not data_dir.is_dir():
+            raise ValueError(f"dataset directory {data_dir} is a file, not a folder of shards "
+                             f"({SHARD_GLOB}, as `python -m rllib_pommer.collect --out` writes)")
         if not data_dir.is_dir():
             raise ValueError(f"dataset directory {data_dir} does not exist")
         found = sorted(data_dir.glob(SHARD_GLOB))

@@ -232,6 +232,18 @@ class _Checkpoint:
                       "epoch": epoch, "batch": batch, "seconds": seconds}, self.path)
 
 
+def check_not_replacing(cfg: BCConfig) -> None:
+    """Refuse an `out` that holds a policy this training did not make: its weights or its policy
+    file exist, and no training state of an earlier run of this command does (a shipped policy,
+    or one `train --export` wrote). Such a policy is replaced only when asked (`--force`)."""
+    if _Checkpoint(cfg).path.is_file():
+        return  # an earlier run of this command: re-running resumes it
+    for path in (cfg.out / WEIGHTS_FILE, policy_file_of(cfg.out)):
+        if path.exists():
+            raise ValueError(f"--out {cfg.out}: {path} exists (a policy not trained here); "
+                             f"pass --force to replace it, or choose another --out")
+
+
 def train(cfg: BCConfig) -> dict:
     """Train (or resume), then write `pi.pt` and `metrics.json` into `cfg.out`."""
     set_cpu_options(cfg.threads)
@@ -311,10 +323,15 @@ def _toml_string(text: str) -> str:
     return json.dumps(text, ensure_ascii=False)
 
 
+def policy_file_of(out: Path) -> Path:
+    """The policy file of the weights folder `out`: `<out name>.toml` beside it."""
+    return out.parent / f"{out.name}.toml"
+
+
 def write_policy_file(out: Path, description: str, greedy: bool = True) -> Path:
     """`<out name>.toml` beside the weights folder `out`: the policy file (kind "learned") by
     which the arena, training and serving find the policy by name (agents/registry.py)."""
-    policy = out.parent / f"{out.name}.toml"
+    policy = policy_file_of(out)
     # greedy by default: a clone plays SimpleAgent's most likely action (sampling won 0.165 of
     # 200 games against SimpleAgent, greedy play 0.290, with v1's first-epoch weights)
     policy.write_text(f'kind = "learned"\nweights = {_toml_string(f"{out.name}/{WEIGHTS_FILE}")}\n'
