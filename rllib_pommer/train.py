@@ -7,7 +7,8 @@
 
 Curricula are TOML files in `curriculum/` (default "quick"; "paper" is the paper's schedule). The
 run directory (default runs/<curriculum name>) gets RLlib checkpoints and TensorBoard logs;
-`--resume` continues an interrupted run from its last checkpoint. The arena plays a run's learner
+`--resume` continues an interrupted run from its last checkpoint, with the curriculum the run
+noted when it started (another one is refused). The arena plays a run's learner
 by its directory: `python -m rllib_pommer.evaluate --team runs/quick --vs static`.
 
 `--stop` stops the run training in RUN_DIR (started by another command) right after its next
@@ -30,9 +31,11 @@ from pathlib import Path
 
 from .rl.settings import RunSettings
 from .util.cli_options import add_options, settings_from
+from .util.outputs import check_output_dir
 
 HELP = {
-    "curriculum": "a name in curriculum/ or a .toml path (default: %(default)s)",
+    "curriculum": "a name in curriculum/ or a .toml path (default: quick; with --resume, the "
+                  "run's own, which the run notes in RUN_DIR/curriculum.json)",
     "out": "run directory (default: runs/<name>)",
     "resume": "continue the run in --out",
     "address": "an existing Ray cluster (HOST:PORT or 'auto')",
@@ -129,7 +132,7 @@ def _pack(parser: argparse.ArgumentParser, out: Path | None) -> int:
                   f"newest checkpoint, or resumed under stale numbers); it now resumes from "
                   f"{checkpoint}")
     print(f"{out}: {size / 2**20:.1f} MiB; continue anywhere with "
-          f"`python -m rllib_pommer.train --curriculum NAME --out {out} --resume`")
+          f"`python -m rllib_pommer.train --out {out} --resume`")
     return 0
 
 
@@ -139,9 +142,16 @@ def _export(parser: argparse.ArgumentParser, out: Path | None, target: Path) -> 
     from .rl.checkpoint_policy import export_policy
 
     try:
+        if not target.name or target.name == "..":
+            raise ValueError(f"--export: no policy folder named (got {str(target)!r}); give "
+                             f"POLICY_DIR, e.g. policies/ppo")
+        check_output_dir(target, "--export")
         weights, policy_file, card = export_policy(out, target)
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:  # a folder that passed the check yet takes no file (/proc, a full disk)
+        print(f"error: --export {target}: cannot write the policy ({exc})", file=sys.stderr)
         return 2
     print(f"wrote {weights}, {policy_file} and {card}; play it with --team {policy_file}")
     return 0

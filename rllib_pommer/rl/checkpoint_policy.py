@@ -21,7 +21,6 @@ import io
 import json
 import pickle
 import pickletools
-import re
 import subprocess
 import typing
 from functools import cache
@@ -34,12 +33,10 @@ from ..game.constants import NUM_ACTIONS
 from ..imitation.learned import LearnedAgent, LearnedPolicy, load_policy_net, weights_file
 from ..imitation.network import PommerNet
 from ..viz.training import HISTORY_FILE, Trial, number, read_trial, write_summary
-from .curriculum import Curriculum, load_curriculum
+from .curriculum import Curriculum, run_curriculum
 
 MODULE_STATE = Path("learner_group/learner/rl_module/learner/module_state.pkl")
 ALGORITHM_STATE = "algorithm_state.pkl"
-# How params.json records the CurriculumCallback partial of rl/config.py (its repr).
-CURRICULUM_IN_PARAMS = re.compile(r"Curriculum\(name='([^']+)'")
 # A history row's identity across commits (the clock is not: a pack may have repaired it).
 LINEAGE_COLUMNS = ("env_runners/num_env_steps_sampled_lifetime",
                    "env_runners/num_episodes_lifetime")
@@ -184,13 +181,13 @@ def checkpoint_age(path: Path) -> tuple[int, float, str]:
 
 
 def _run_curriculum(trial: Path) -> Curriculum:
-    """The curriculum a trial trained on: named in the callback its params.json records."""
-    params = trial / "params.json"
-    found = CURRICULUM_IN_PARAMS.search(params.read_text()) if params.is_file() else None
-    if not found:
-        raise ValueError(f"{params}: names no curriculum (a run of `python -m "
+    """The curriculum a trial trained on: the one its run noted (`curriculum.run_curriculum`:
+    a shipped name, or the file a user gave, whatever name that file takes)."""
+    curriculum = run_curriculum(trial.parent)
+    if curriculum is None:
+        raise ValueError(f"{trial / 'params.json'}: names no curriculum (a run of `python -m "
                          f"rllib_pommer.train` records its CurriculumCallback there)")
-    return load_curriculum(found.group(1))
+    return curriculum
 
 
 def _git(folder: Path, *args: str) -> str:

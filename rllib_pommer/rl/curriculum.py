@@ -28,6 +28,8 @@ imports neither Ray nor torch (tests/test_layering.py checks a whole load in a f
 
 from __future__ import annotations
 
+import json
+import re
 import sys
 import typing
 from dataclasses import dataclass, fields
@@ -251,3 +253,96 @@ def load_curriculum(name_or_path: str | Path) -> Curriculum:
         max_steps=data.get("max_steps", TEAM_PRESET.max_steps),
         ppo=PPOSettings.from_options(ppo),
     )
+
+
+# The curriculum a run trains on, noted in its folder when it starts (`record_run_curriculum`):
+# a shipped one by its name (the run may move to another clone), another by its file's path.
+RUN_CURRICULUM_FILE = "curriculum.json"
+DEFAULT_CURRICULUM = "quick"
+# How a trial's params.json names its curriculum (the repr of rl/config.py's CurriculumCallback
+# partial): a run started before runs noted theirs is read from there.
+CURRICULUM_IN_PARAMS = re.compile(r"Curriculum\(name='([^']+)', path=\w*Path\('([^']+)'\)")
+
+
+def shipped_name(path: Path) -> str | None:
+    """The name of a shipped curriculum file (here, or in another clone's `curriculum/`: a
+    packed run moves), None for any other file."""
+    here = (curriculum_dir() / f"{path.stem}.toml").resolve()
+    if Path(path).resolve() == here or (path.parent.name == "curriculum" and here.is_file()):
+        return path.stem
+    return None
+
+
+def describe(curriculum: Curriculum) -> str:
+    """A curriculum as a user names it: its shipped name, or its file."""
+    name = shipped_name(curriculum.path)
+    return repr(name) if name else f"{curriculum.name!r} ({curriculum.path})"
+
+
+def record_run_curriculum(run: Path, curriculum: Curriculum) -> None:
+    """Note in the run folder which curriculum the run trains on."""
+    name = shipped_name(curriculum.path)
+    Path(run).mkdir(parents=True, exist_ok=True)
+    (Path(run) / RUN_CURRICULUM_FILE).write_text(json.dumps(
+        {"curriculum": name or str(curriculum.path.resolve()), "name": curriculum.name}) + "\n")
+
+
+def _recorded(run: Path) -> tuple[str, str, str] | None:
+    """(shipped name or file path, curriculum name, where it was read) of the run's curriculum,
+    if noted."""
+    note = Path(run) / RUN_CURRICULUM_FILE
+    if note.is_file():
+        try:
+            data = json.loads(note.read_text())
+            return str(data["curriculum"]), str(data["name"]), str(note)
+        except (ValueError, KeyError, TypeError) as exc:
+            raise ValueError(f"{note}: unreadable ({type(exc).__name__}: {exc}); resume with "
+                             f"--curriculum and the run's own curriculum") from None
+    for params in sorted(Path(run).resolve().glob("*/params.json")):
+        found = CURRICULUM_IN_PARAMS.search(params.read_text())
+        if found:
+            path = Path(found.group(2))
+            return shipped_name(path) or str(path), found.group(1), str(params)
+    return None
+
+
+def _gone(run: Path, path: str, where: str) -> ValueError:
+    return ValueError(f"the run in {run} trained on the curriculum file {path} (noted in "
+                      f"{where}), which is gone; put it back, or give its new place with "
+                      f"--curriculum")
+
+
+def run_curriculum(run: Path) -> Curriculum | None:
+    """The curriculum the run in `run` trained on (its `RUN_CURRICULUM_FILE`, else its trials'
+    params.json); None if neither names one. A curriculum file that is gone is a ValueError
+    naming it."""
+    recorded = _recorded(run)
+    if recorded is None:
+        return None
+    name_or_path, _, where = recorded
+    if Path(name_or_path).is_absolute() and not Path(name_or_path).is_file():
+        raise _gone(run, name_or_path, where)
+    return load_curriculum(name_or_path)
+
+
+def resume_curriculum(run: Path, given: Curriculum | None) -> Curriculum:
+    """The curriculum a resume of the run in `run` trains on: its own, also when `given` (the
+    --curriculum option) is None. Another one is refused, naming both; a run whose curriculum
+    file moved takes `given` in its place when the names agree."""
+    recorded = _recorded(run)
+    if recorded is None:
+        if given is None:
+            raise ValueError(f"--resume: the run in {run} names no curriculum (no "
+                             f"{RUN_CURRICULUM_FILE}, no params.json); pass --curriculum")
+        return given
+    name_or_path, name, where = recorded
+    if Path(name_or_path).is_absolute() and not Path(name_or_path).is_file():
+        if given is not None and given.name == name:
+            return given
+        raise _gone(run, name_or_path, where)
+    own = load_curriculum(name_or_path)
+    if given is not None and given.path.resolve() != own.path.resolve():
+        raise ValueError(f"--resume: the run in {run} trains on curriculum {describe(own)}, "
+                         f"not {describe(given)}; resume it without --curriculum, or start "
+                         f"the other curriculum in another --out")
+    return own

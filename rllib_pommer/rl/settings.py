@@ -67,7 +67,7 @@ class PPOSettings:
 class RunSettings:
     """One `python -m rllib_pommer.train` run; each field is one option of the command."""
 
-    curriculum: str = "quick"
+    curriculum: str | None = None  # None: the run's own on resume, else "quick"
     out: Path | None = None  # default runs/<curriculum name>
     resume: bool = False
     address: str | None = None  # None: a Ray instance of our own on this machine
@@ -78,7 +78,8 @@ class RunSettings:
     torch_threads: int = 1  # the learner's (and the driver's): 2 with 2 env runners on 2 cores
 
     def __post_init__(self):
-        for name, low in (("num_env_runners", 0), ("num_cpus", 1), ("torch_threads", 1)):
+        for name, low in (("num_env_runners", 0), ("num_cpus", 1), ("torch_threads", 1),
+                          ("seed", 0)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < low:
                 raise ValueError(f"--{name.replace('_', '-')} must be {low} or more, "

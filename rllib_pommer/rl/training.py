@@ -34,7 +34,13 @@ from ray import tune
 from . import ray_session, tune_state
 from .checkpoint_policy import trial_dirs, unreadable
 from .config import build_config, check_weights
-from .curriculum import Curriculum, load_curriculum
+from .curriculum import (
+    DEFAULT_CURRICULUM,
+    Curriculum,
+    load_curriculum,
+    record_run_curriculum,
+    resume_curriculum,
+)
 from .names import LEARNER, LEARNER_THREADS_ENV
 from .packing import pack_run
 from .settings import RunSettings
@@ -221,16 +227,20 @@ def start_run(settings: RunSettings, say=print) -> tuple[Curriculum, Path]:
     (default runs/<curriculum name>), after ending what a SIGKILLed run in that directory left
     running (told to `say`) and, to resume, packing it (module docstring). Bad input is a
     ValueError; a Ray that does not start, a `RayStartError`."""
-    curriculum = load_curriculum(settings.curriculum)
-    out = settings.out or Path("runs") / curriculum.name
+    given = load_curriculum(settings.curriculum) if settings.curriculum else None
+    out = settings.out or Path("runs") / (given.name if given else DEFAULT_CURRICULUM)
     ended = ray_session.reap(out)
     if ended:
         say(f"ended {len(ended)} Ray processes left by the killed run in {out}")
     check_run_dir(out, settings.resume)
+    curriculum = (resume_curriculum(out, given) if settings.resume
+                  else given or load_curriculum(DEFAULT_CURRICULUM))
     for note in kept_layouts(out, settings):
         say(note)
-    if not resumes_from_checkpoint(out, settings.resume):  # else pi comes from the checkpoint
+    if not resumes_from_checkpoint(out, settings.resume):  # else pi and vf come from it
         check_weights(settings.pi_weights or curriculum.pi_weights)
+        if curriculum.vf_weights:
+            check_weights(curriculum.vf_weights, part="vf")
     if settings.resume:
         for trial, (kept, registered) in pack_run(out).items():
             if kept != registered:
@@ -239,7 +249,30 @@ def start_run(settings: RunSettings, say=print) -> tuple[Curriculum, Path]:
     init_ray(settings.address, num_cpus=settings.num_cpus, torch_threads=settings.torch_threads)
     if settings.address is None:  # our own Ray: note it, for the next start to clean up after
         ray_session.record(out)
+    else:
+        try:
+            check_cluster_fits(settings)
+        except ValueError:
+            ray.shutdown()  # leave the cluster before the error ends the command
+            raise
+    record_run_curriculum(out, curriculum)
     return curriculum, out
+
+
+def check_cluster_fits(settings: RunSettings) -> None:
+    """Refuse a run the cluster's free CPUs cannot hold: Tune would wait for them for ever,
+    printing "insufficient resources" every minute. The run asks for one CPU for the
+    algorithm's process (its learner) and `cpus_per_env_runner` for each remote runner."""
+    free = ray.available_resources().get("CPU", 0.0)
+    runners = settings.num_env_runners * cpus_per_env_runner(settings)
+    if 1 + runners > free + 1e-9:
+        fits = max(int(free - 1 + 1e-9), 0)
+        raise ValueError(
+            f"the Ray cluster at {settings.address!r} has {free:g} free CPUs; the run asks for "
+            f"{1 + runners:g} (1 for the learner's process, {runners:g} for "
+            f"--num-env-runners {settings.num_env_runners}): "
+            + (f"pass --num-env-runners {fits} or fewer, or " if free >= 1 else "")
+            + "free or add CPUs")
 
 
 def cpus_per_env_runner(settings: RunSettings) -> float:

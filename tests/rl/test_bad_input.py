@@ -173,6 +173,7 @@ def _no_ray(monkeypatch):
     (["--curriculum", "no_such_curriculum"], ["curriculum 'no_such_curriculum' not found"]),
     (["--pi-weights", "absent.pt"], ["imitation weights not found: absent.pt"]),
     (["--resume"], ["--resume: no run to resume"]),
+    (["--seed", "-1"], ["--seed must be 0 or more, got -1"]),  # issue 40: say which option
 ])
 def test_train_checks_its_arguments_before_ray_starts(tmp_path, monkeypatch, capsys, args, words):
     from rllib_pommer.train import main
@@ -224,3 +225,72 @@ def test_a_ray_that_does_not_start_is_one_line_with_what_to_check(tmp_path, monk
     assert err.count("\n") == 1 and err.startswith("error: a local Ray instance did not start "
                                                    "(TimeoutError: Timed out after 60 seconds")
     assert "/tmp/ray/session_latest/logs" in err and "Traceback" not in err
+
+
+def test_vf_weights_of_the_wrong_shape_are_refused_before_ray(tmp_path, monkeypatch, capsys,
+                                                             pi_weights):
+    """Issue 40: caught only after Ray started, leaving ray_session.json behind; now checked
+    before, as pi_weights is."""
+    import torch
+
+    from rllib_pommer.imitation.network import PommerNet
+    from rllib_pommer.rl.curriculum import curriculum_dir
+    from rllib_pommer.train import main
+
+    started = _no_ray(monkeypatch)
+    torch.save(PommerNet().state_dict(), tmp_path / "vf.pt")  # a policy net: 6 outputs, not 1
+    curriculum = tmp_path / "c.toml"
+    curriculum.write_text('vf_weights = "vf.pt"\n' + (curriculum_dir() / "smoke.toml").read_text())
+    out = tmp_path / "run"
+    with pytest.raises(SystemExit) as exited:
+        main(["--curriculum", str(curriculum), "--out", str(out), "--pi-weights", str(pi_weights)])
+    assert exited.value.code == 2 and started == []
+    assert f"{tmp_path / 'vf.pt'}: weights do not fit PommerNet" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def _on_a_cluster(monkeypatch, free_cpus: float):
+    """A cluster at HEAD with `free_cpus` free CPUs, joined without Ray starting; returns the
+    list of shutdowns and the curricula training was handed."""
+    import ray
+
+    from rllib_pommer.rl import training
+
+    shutdowns, handed = [], []
+    monkeypatch.setattr(training, "init_ray", lambda *args, **kwargs: None)
+    monkeypatch.setattr(ray, "available_resources", lambda: {"CPU": free_cpus})
+    monkeypatch.setattr(ray, "shutdown", lambda: shutdowns.append(1))
+    monkeypatch.setattr(training, "train", lambda curriculum, out, settings: handed.append(
+        settings) or type("Result", (), {"checkpoint": None, "path": str(out), "metrics": {
+            "curriculum": {"episodes": curriculum.total_episodes}}})())
+    return shutdowns, handed
+
+
+def test_a_cluster_too_small_for_the_runners_is_said_up_front(tmp_path, monkeypatch, capsys,
+                                                              pi_weights):
+    """Issue 40, case 16: 2 free CPUs, and the run asks for 3 (1 + 1 per runner): Tune waited
+    for ever. Now the command says what is missing and leaves the cluster."""
+    from rllib_pommer.train import main
+
+    shutdowns, handed = _on_a_cluster(monkeypatch, 2.0)
+    args = ["--curriculum", "smoke", "--address", "10.0.0.1:6379", "--pi-weights",
+            str(pi_weights)]
+    with pytest.raises(SystemExit) as exited:
+        main([*args, "--out", str(tmp_path / "a"), "--num-env-runners", "2"])
+    assert exited.value.code == 2 and handed == [] and shutdowns
+    err = capsys.readouterr().err
+    assert ("error: the Ray cluster at '10.0.0.1:6379' has 2 free CPUs; the run asks for 3 (1 "
+            "for the learner's process, 2 for --num-env-runners 2): pass --num-env-runners 1 "
+            "or fewer, or free or add CPUs") in err
+    assert main([*args, "--out", str(tmp_path / "b"), "--num-env-runners", "1"]) == 0
+    assert [s.num_env_runners for s in handed] == [1]
+
+
+def test_the_cluster_check_reads_what_ray_has_free(ray_session):
+    """The same check against a real Ray of 2 CPUs (the tests' own), joined as a cluster."""
+    from rllib_pommer.rl.settings import RunSettings
+    from rllib_pommer.rl.training import check_cluster_fits
+
+    check_cluster_fits(RunSettings(address="auto", num_env_runners=1))
+    with pytest.raises(ValueError, match="has 2 free CPUs; the run asks for 3"):
+        check_cluster_fits(RunSettings(address="auto", num_env_runners=2))

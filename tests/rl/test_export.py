@@ -58,7 +58,8 @@ def _fake_run(run: Path, pi: PommerNet, iterations: int = 4, checkpoint_at: int 
         (path / "rllib_checkpoint.json").write_text('{"type": "Algorithm"}')
     (trial / "params.json").write_text(json.dumps(
         {"callbacks": "functools.partial(<class 'rllib_pommer.rl.callbacks.CurriculumCallback'>, "
-                      "Curriculum(name='smoke', path=PosixPath('/elsewhere/smoke.toml'), ...)"}))
+                      "Curriculum(name='smoke', "
+                      "path=PosixPath('/elsewhere/curriculum/smoke.toml'), ...)"}))
     with open(trial / "progress.csv", "w", newline="") as f:
         writer = csv.writer(f)
         writer.writerow(COLUMNS)
@@ -254,3 +255,44 @@ def test_the_card_lists_the_packs_the_exported_rows_came_through(tmp_path):
     assert packed_commits(run, trial_now) == [last, first]
     trial_now.rows = trial_now.rows[:2]  # exported at iteration 2: before the last pack
     assert packed_commits(run, trial_now) == [first]
+
+
+@pytest.mark.parametrize("name", ["mysmoke", "quick"])
+def test_a_run_of_a_curriculum_file_exports_with_that_file(tmp_path, name):
+    """The run trained on a file (issue 40, cases 5 and 6): named 'mysmoke', the export found
+    no such curriculum; named 'quick', the card described the shipped quick."""
+    mine = tmp_path / "mine" / "mysmoke.toml"
+    mine.parent.mkdir()
+    mine.write_text((REPO / "curriculum" / "smoke.toml").read_text()
+                    .replace('name = "smoke"', f'name = "{name}"'))
+    trial = _fake_run(tmp_path / "run", PommerNet())
+    params = trial / "params.json"
+    params.write_text(params.read_text().replace("name='smoke', path=PosixPath('/elsewhere/"
+                                                 "curriculum/smoke.toml')",
+                                                 f"name='{name}', path=PosixPath('{mine}')"))
+    assert str(mine) in params.read_text()
+    target = tmp_path / "ppo"
+    assert main(["--out", str(tmp_path / "run"), "--export", str(target)]) == 0
+    source = json.loads((target / "source.json").read_text())
+    assert source["curriculum"]["name"] == name
+    assert [s["name"] for s in source["curriculum"]["stages"]] == ["warmup", "static"]
+    assert "18 of 24 games" in (target / "MODEL_CARD.md").read_text()
+
+
+def _a_file(tmp_path: Path) -> Path:
+    (tmp_path / "a_file").write_text("")
+    return tmp_path / "a_file"
+
+
+@pytest.mark.parametrize("target, message", [
+    (lambda t: _a_file(t), "--export {t}/a_file: {t}/a_file is a file, not a folder"),
+    (lambda t: _a_file(t) / "ppo", "--export {t}/a_file/ppo: {t}/a_file is a file, not a folder"),
+    (lambda t: Path("/proc/ppo"), "--export /proc/ppo: cannot write the policy ("),
+    (lambda t: Path(""), "--export: no policy folder named (got '.'); give POLICY_DIR"),
+])
+def test_an_export_target_that_cannot_be_written_is_one_line(tmp_path, capsys, target, message):
+    """Issue 40, case 11 and the vague `--export ""`: each was a traceback or a vague line."""
+    _fake_run(tmp_path / "run", PommerNet())
+    assert main(["--out", str(tmp_path / "run"), "--export", str(target(tmp_path))]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith(f"error: {message.format(t=tmp_path)}"), err
