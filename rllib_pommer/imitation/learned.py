@@ -47,11 +47,13 @@ def load_policy_net(path: str | Path, num_outputs: int = NUM_ACTIONS) -> PommerN
 
 
 class LearnedPolicy:
-    """One network shared by every agent of a policy in this process."""
+    """One network shared by every agent of a policy in this process; `source` is the file its
+    weights were read from (a state_dict, or an RLlib checkpoint's module state)."""
 
-    def __init__(self, net: PommerNet, greedy: bool):
+    def __init__(self, net: PommerNet, greedy: bool, source: Path):
         self.net = net
         self.greedy = greedy
+        self.source = source
 
     @torch.no_grad()
     def probabilities(self, obs: Observation) -> np.ndarray:
@@ -95,7 +97,7 @@ class LearnedAgent:
 
 @cache
 def _shared_policy(weights: Path, greedy: bool) -> LearnedPolicy:
-    return LearnedPolicy(load_policy_net(weights), greedy)
+    return LearnedPolicy(load_policy_net(weights), greedy, weights)
 
 
 def weights_file(spec: PolicySpec) -> Path:
@@ -120,5 +122,4 @@ def greedy_actor(name_or_path: str) -> tuple[Callable[[Observation], np.ndarray]
     if not isinstance(agent, LearnedAgent) or spec.filters:
         raise ValueError(f"policy {name_or_path!r} is not a plain learned policy "
                          f"(kind {spec.kind!r}, filters {list(spec.filters)})")
-    weights = weights_file(spec) if spec.kind == "learned" else Path(spec.params["checkpoint"])
-    return (lambda obs: agent.policy.probabilities(obs).argmax(-1)), weights.resolve()
+    return (lambda obs: agent.policy.probabilities(obs).argmax(-1)), agent.policy.source

@@ -322,7 +322,8 @@ def export_policy(source: str | Path, target: str | Path) -> tuple[Path, Path, P
 
 @cache
 def _shared_policy(path: Path, greedy: bool) -> LearnedPolicy:
-    return LearnedPolicy(load_checkpoint_net(path), greedy)
+    checkpoint = latest_checkpoint(path)
+    return LearnedPolicy(load_checkpoint_net(checkpoint), greedy, checkpoint / MODULE_STATE)
 
 
 def checkpoint_path(spec: PolicySpec) -> Path:

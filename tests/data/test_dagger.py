@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import hashlib
+
 import numpy as np
 import pytest
 import torch
@@ -10,9 +12,10 @@ from rllib_pommer.collect import main as collect_main
 from rllib_pommer.data.collector import Collection, Dagger
 from rllib_pommer.data.dagger import TEAM_SEATS, play_dagger_games, seating
 from rllib_pommer.data.dataset import open_dataset
-from rllib_pommer.game.constants import START_POSITIONS
+from rllib_pommer.game.constants import START_POSITIONS, Action
 from rllib_pommer.imitation.learned import greedy_actor
 from rllib_pommer.imitation.network import PommerNet
+from rllib_pommer.rl.checkpoint_policy import MODULE_STATE
 
 DRAWS = 8
 
@@ -76,3 +79,44 @@ def test_dagger_needs_label_draws_and_known_opponents(tmp_path):
         Collection(tmp_path / "y", 4, 5, 2, DRAWS, Dagger(policy, ("random",)))
     with pytest.raises(ValueError, match="not a plain learned policy"):
         Collection(tmp_path / "z", 4, 5, 2, DRAWS, Dagger("simple", ("static",)))
+
+
+def _ppo_run(tmp_path) -> tuple:
+    """A PPO run folder as `train` leaves it (tests/rl/test_export.py) whose learner bombs."""
+    from ..rl.test_export import _fake_run
+
+    torch.manual_seed(1)
+    net = PommerNet()
+    with torch.no_grad():  # it lays a bomb and stays: its games are short
+        net.head[-1].bias[int(Action.BOMB)] += 100.0
+    trial = _fake_run(tmp_path / "run", net)
+    return tmp_path / "run", trial
+
+
+def test_dagger_data_from_a_ppo_run_folder(tmp_path):
+    """Issue 40, case 14: a run folder (or its trial, or checkpoint) as --dagger was an
+    IsADirectoryError; its learner's module state is the file the dataset pins."""
+    run, trial = _ppo_run(tmp_path)
+    state = (trial / "checkpoint_000002" / MODULE_STATE).resolve()
+    for policy in (run, trial, trial / "checkpoint_000002"):
+        assert greedy_actor(str(policy))[1] == state
+    assert collect_main(["--games", "1", "--out", str(tmp_path / "d"), "--shard-games", "1",
+                         "--workers", "1", "--label-draws", "2", "--dagger", str(run),
+                         "--vs", "static"]) == 0
+    batch = next(open_dataset(tmp_path / "d").iter_batches(10**6))
+    assert len(batch.action) > 0  # labels of the states the bomber visited
+
+
+def test_a_relative_checkpoint_is_found_from_the_policy_file(tmp_path, monkeypatch):
+    """`checkpoint` relative to the policy file, as the registry plays it, from any directory
+    (it resolved against the working directory: FileNotFoundError from another folder)."""
+    run, trial = _ppo_run(tmp_path)
+    policy = tmp_path / "policies" / "ppo_run.toml"
+    policy.parent.mkdir()
+    policy.write_text('kind = "rllib_checkpoint"\ncheckpoint = "../run"\n')
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    collection = Collection(tmp_path / "d", 2, 0, 2, DRAWS, Dagger(str(policy), ("static",)))
+    assert collection.plan.template.policy_sha256 == hashlib.sha256(
+        (trial / "checkpoint_000002" / MODULE_STATE).read_bytes()).hexdigest()
