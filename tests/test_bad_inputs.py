@@ -92,6 +92,21 @@ ROW = json.dumps({"game": 0, "seed": 0, "seats_a": [0, 2], "result": "win", "tea
                   "vs": "simple", "filters": []})
 
 
+def _with_summary(records: Path, text: str) -> Path:
+    """`records` with an evaluate --json summary of this text beside it."""
+    records.with_suffix(".json").write_text(text)
+    return records
+
+
+def _policy_folder(tmp: Path) -> Path:
+    """A policy's folder with its weights and policy file, as shipped."""
+    out = tmp / "shipped"
+    out.mkdir()
+    (out / "pi.pt").write_bytes(b"weights")
+    bc.write_policy_file(out, "a shipped policy")
+    return out
+
+
 def _a_file(tmp: Path) -> Path:
     path = tmp / "a_file"
     path.write_text("")
@@ -200,6 +215,13 @@ CASES = [
      lambda t, r, s: ["--out", str(t / "r"), str(_records(t, [ROW])),
                       str(_records(t, [ROW], "copy.jsonl"))],
      "copy.jsonl: game 0 (seed 0) of static vs simple appears twice (also in"),
+    ("report on a damaged summary beside the records", report,
+     lambda t, r, s: ["--out", str(t / "r"), str(_with_summary(_records(t, [ROW]),
+                                                               '{"team": "st'))],
+     "static__vs__simple.json:1: not an evaluate --json summary"),
+    ("imitate --out over a policy it did not train", imitate,
+     lambda t, r, s: ["--data", str(s), "--out", str(_policy_folder(t))],
+     "shipped/pi.pt exists (a policy not trained here); pass --force to replace it"),
     ("report on a damaged records line", report,
      lambda t, r, s: ["--out", str(t / "r"), str(_records(t, [ROW, ROW[:30]]))],
      "static__vs__simple.jsonl:2: not a JSON row"),

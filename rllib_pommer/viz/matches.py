@@ -114,8 +114,13 @@ def match_of(path: Path, rows: list[dict] | None = None) -> Match:
     """The match of a records file (module docstring); `rows`: its rows, if already read."""
     sidecar = path.with_suffix(".json")
     if sidecar.is_file():
-        summary = json.loads(sidecar.read_text().strip().splitlines()[-1])
-        if not {"team", "vs"} <= set(summary):
+        lines = sidecar.read_text().strip().splitlines()
+        try:
+            summary = json.loads(lines[-1])
+        except (IndexError, json.JSONDecodeError) as exc:
+            raise ValueError(f"{sidecar}:{len(lines)}: not an evaluate --json summary "
+                             f"({exc})") from None
+        if not isinstance(summary, dict) or not {"team", "vs"} <= set(summary):
             raise ValueError(f"{sidecar}: an evaluate --json summary needs 'team' and 'vs'")
         team, vs, filters = summary["team"], summary["vs"], summary.get("filters", [])
     elif named := _named_by_rows(path, read_rows(path) if rows is None else rows):
