@@ -1,6 +1,6 @@
 """The forward model: one step of one game, compiled, in the reference's exact sub-step order.
 
-Each function mirrors a sub-step of ../shared/docs/pommerman-rules.md §3 and says which. The claim
+Each function mirrors a sub-step of docs/rules.md §3 and says which. The claim
 counters and both settle loops reproduce the reference's quirks on purpose (counters that only grow,
 agent-bomb crossings that bounce only the bomb, boomerang and diagonal kicks): fidelity is checked
 by replaying the recorded reference games (`python -m rllib_pommer.replay verify`).

@@ -10,7 +10,7 @@ env steps (~3,500 learner rows; all four agents step, and the learner's rows are
 trained); value loss coefficient 1 with RLlib's default value clip 10 (returns are within
 [-1, 1]); no KL penalty (the clip does the work); no dual clip (learner.py; a curriculum's
 `dual_clip` sets its bound); gradient norm clip 10; 8 envs per env runner
-(batched inference, rllib-notes I). More envs amortise RLlib's per-step connector and inference
+(batched inference). More envs amortise RLlib's per-step connector and inference
 calls: against SimpleAgents, sampling alone ran 1.16x the env steps/s with 16, 1.47x with 32 and
 1.55x with 64, and whole iterations (4 epochs of learning included) 1.13x with 32 (medians of 4-5
 interleaved rounds in one process, both campaigns on the cores, 2026-12-03). The campaigns and
