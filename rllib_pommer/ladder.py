@@ -67,8 +67,8 @@ def main(argv: list[str] | None = None) -> int:
                         help="comma-separated policy names (default: every shipped and "
                              "scripted policy, learned ones also with _jitter_action)")
     parser.add_argument("--games", type=int, default=200, help="games a pair (%(default)s)")
-    parser.add_argument("--seed", type=int, default=0, help="every pair's match seed, and the "
-                        "ratings' shuffles and bootstrap (%(default)s)")
+    parser.add_argument("--seed", type=int, default=0,
+                        help="every pair's match seed, and the bootstrap's (%(default)s)")
     parser.add_argument("--bootstrap", type=int, default=BOOTSTRAP,
                         help="replicates for the intervals (%(default)s)")
     parser.add_argument("--workers", type=int, default=None, help="processes (default: cores)")

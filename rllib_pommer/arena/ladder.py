@@ -13,27 +13,25 @@ whose file holds games 0..games-1 of the ladder's seed is played and never playe
 made with another number of games or seed is refused, naming it: its games would not be this
 ladder's, and mixing them would rate pairs on unequal terms. Adding a policy adds only its pairs.
 
-Ratings. openskill's Bradley-Terry full-pairing model (Weng and Lin 2011). A Team game is two
-copies of one policy against two copies of another, so the unit rated is the policy: each game
-is a one-against-one game between the two policies' ratings (two players sharing one rating
-would count every game twice). A win and a loss are ranks 0 and 1; a tie is equal ranks, a
-draw, which the model's update scores as half a win. Frozen policies do not change, so the
-model's dynamics tau is 0. The update's win probability 1 / (1 + exp(-(mu_a - mu_b) / c)), with
-c = sqrt(2 beta^2 + sigma_a^2 + sigma_b^2), is Elo's 1 / (1 + 10^(-d / 400)) when beta =
-400 / (ln 10 sqrt 2) and the sigmas are small beside beta, as they are after a few hundred
-games: `SCALE` sets beta so, and a rating is on Elo's scale, 200 points above another meaning an
-expected score (a win plus half a tie) of 0.76 against it. Ratings are centred at mean 0 over
-the ladder's policies. openskill rates online, one game after another; the ladder's games are
-fed once, in an order shuffled by the ladder's seed. A policy that wins or loses every game has
-no finite Bradley-Terry rating; its rating then stops where openskill's prior (sigma = 2 beta)
-and the shrinking updates leave it.
+Ratings. A Bradley-Terry model fitted by maximum likelihood over all games at once (choix's
+iterative Luce spectral ranking on the matrix of wins): policy i beats policy j with probability
+1 / (1 + exp(-(t_i - t_j))). A Team game is two copies of one policy against two copies of
+another, so the unit rated is the policy, one rating per name. A tie counts as a draw: half a win
+to each side, so a pair's score is (wins + ties / 2) / games. Each pair also gets one virtual tie,
+so a policy that wins or loses every game still has a finite rating (with 200 games a pair it
+moves a pair's score by at most 0.0025; 200 wins out of 200 read as a score of 0.9975, about
+1,040 points). The ratings are t * 400 / ln 10, Elo's scale, centred at mean 0 over the
+ladder: 200 points above another policy means an expected score (a win plus half a tie) of
+1 / (1 + 10^(-200/400)) = 0.76 against it. The fit does not depend on the order of the games
+(openskill's online Weng-Lin updates do, and shrink large differences: README, The ladder).
 
 Intervals. A 95% percentile bootstrap over games: each of `bootstrap` replicates draws every
-pair's games with replacement (as many as the pair played), rates them again in a freshly
-shuffled order and centres them; a policy's interval runs from the 2.5th to the 97.5th
-percentile of its replicate ratings. The replicates' draws come from a numpy generator seeded
-by the ladder's seed, so the same records give the same table. The interval covers the chance
-in the games played and in the order openskill saw them.
+pair's games with replacement (as many as the pair played: its wins, losses and ties as one
+multinomial draw) and fits again; a policy's interval runs from the 2.5th to the 97.5th
+percentile of its replicate ratings. The draws come from a numpy generator seeded by the
+ladder's seed, so the same records give the same table. A policy that won or lost every game
+has the same games in every replicate: its interval is empty and says only that (the table
+says so in words).
 """
 
 from __future__ import annotations
@@ -42,12 +40,12 @@ import itertools
 import json
 import math
 import os
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
+import choix
 import numpy as np
-from openskill.models import BradleyTerryFull
 
 from ..agents.registry import KINDS, policy_names, resolve_policy
 from ..game.records import read_jsonl
@@ -57,17 +55,18 @@ from .records import GameRecord, game_record, write_records
 RECORDS_DIR = "records"
 LADDER_FILE = "ladder.json"
 FILTERED = "_jitter_action"  # the variant of each learned policy a default ladder also rates
-SCALE = 400 / (math.log(10) * math.sqrt(2))  # openskill's beta that puts mu on Elo's scale
-BOOTSTRAP = 200
-RANKS = {"win": [0, 1], "loss": [1, 0], "tie": [0, 0]}  # team A's result -> openskill ranks
+ELO = 400 / math.log(10)  # Elo points per unit of Bradley-Terry strength
+VIRTUAL_TIES = 1  # a pair's games, as ties, added to every pair
+BOOTSTRAP = 1000
+RESULTS = ("win", "loss", "tie")  # team A's results, in the order of a pair's row
 
 Pair = tuple[str, str]
 
 
 @dataclass(frozen=True)
 class Ladder:
-    """Which policies, how many games a pair, the seed of every pair's match and of the
-    ratings' shuffles, and how many bootstrap replicates the intervals take."""
+    """Which policies (kept sorted), how many games a pair, the seed of every pair's match and
+    of the bootstrap, and how many bootstrap replicates the intervals take."""
 
     policies: tuple[str, ...]
     games: int
@@ -89,9 +88,10 @@ class Ladder:
                 raise ValueError(f"ladder policies are names in policies/ (each names a records "
                                  f"file), not paths: got {name!r}")
             resolve_policy(name)  # an unknown name fails here, before any game
+        object.__setattr__(self, "policies", tuple(sorted(self.policies)))  # the order is no fact
 
     def pairs(self) -> list[Pair]:
-        return list(itertools.combinations(sorted(self.policies), 2))
+        return list(itertools.combinations(self.policies, 2))
 
     def match(self, pair: Pair) -> MatchSpec:
         return MatchSpec(pair[0], pair[1], self.games, self.seed)
@@ -155,26 +155,21 @@ class Standing:
     tie: int
 
 
-def _games(ladder: Ladder, played: Mapping[Pair, Sequence[GameRecord]]):
-    """Every game as (index of team A, index of team B, A's result), in the order of the
-    ladder's pairs."""
-    index = {name: k for k, name in enumerate(ladder.policies)}
-    return [(index[a], index[b], record.result)
-            for a, b in ladder.pairs() for record in played[(a, b)]]
+def _results(ladder: Ladder, played: Mapping[Pair, Sequence[GameRecord]]) -> np.ndarray:
+    """Team A's wins, losses and ties in each of the ladder's pairs, one row per pair."""
+    return np.array([[sum(r.result == result for r in played[pair]) for result in RESULTS]
+                     for pair in ladder.pairs()], np.int64)
 
 
-def _rate_once(count: int, games: Sequence[tuple[int, int, str]],
-               order: Iterable[int]) -> np.ndarray:
-    """One online pass of openskill over `games` in `order`: the centred ratings (module
-    docstring)."""
-    model = BradleyTerryFull(mu=0.0, sigma=2 * SCALE, beta=SCALE, tau=0.0)
-    ratings = [model.rating() for _ in range(count)]
-    for k in order:
-        a, b, result = games[k]
-        [[ratings[a]], [ratings[b]]] = model.rate([[ratings[a]], [ratings[b]]],
-                                                  ranks=RANKS[result])
-    mu = np.array([rating.mu for rating in ratings])
-    return mu - mu.mean()
+def _fit(count: int, pairs: Sequence[tuple[int, int]], results: np.ndarray) -> np.ndarray:
+    """Centred Elo-scale ratings of the Bradley-Terry fit of `results` (rows: wins, losses,
+    ties of the first policy of each pair) with one virtual tie a pair (module docstring)."""
+    wins = np.zeros((count, count))
+    for (a, b), (win, loss, tie) in zip(pairs, results, strict=True):
+        wins[a, b] += win + (tie + VIRTUAL_TIES) / 2
+        wins[b, a] += loss + (tie + VIRTUAL_TIES) / 2
+    strengths = choix.ilsr_pairwise_dense(wins, max_iter=1000)
+    return (strengths - strengths.mean()) * ELO
 
 
 def rate(ladder: Ladder, played: Mapping[Pair, Sequence[GameRecord]]) -> list[Standing]:
@@ -183,25 +178,24 @@ def rate(ladder: Ladder, played: Mapping[Pair, Sequence[GameRecord]]) -> list[St
     missing = [pair for pair in ladder.pairs() if pair not in played]
     if missing:
         raise ValueError(f"pair {missing[0][0]} vs {missing[0][1]} has not been played")
-    policies = list(ladder.policies)
-    games = _games(ladder, played)
+    index = {name: k for k, name in enumerate(ladder.policies)}
+    pairs = [(index[a], index[b]) for a, b in ladder.pairs()]
+    results = _results(ladder, played)
+    ratings = _fit(len(index), pairs, results)
     rng = np.random.default_rng(ladder.seed)
-    ratings = _rate_once(len(policies), games, rng.permutation(len(games)))
-    sizes = [len(played[pair]) for pair in ladder.pairs()]
-    starts = np.cumsum([0, *sizes[:-1]])
-    replicates = []
-    for _ in range(ladder.bootstrap):
-        drawn = np.concatenate([start + rng.integers(0, size, size)
-                                for start, size in zip(starts, sizes, strict=True)])
-        replicates.append(_rate_once(len(policies), games, rng.permutation(drawn)))
+    games = results.sum(axis=1)
+    replicates = [_fit(len(index), pairs, np.array([rng.multinomial(n, row / n)
+                                                    for n, row in zip(games, results,
+                                                                      strict=True)]))
+                  for _ in range(ladder.bootstrap)]
     low, high = np.percentile(np.array(replicates), [2.5, 97.5], axis=0)
     standings = []
-    for k, name in enumerate(policies):
-        results = [result if a == k else {"win": "loss", "loss": "win"}.get(result, result)
-                   for a, b, result in games if k in (a, b)]
+    for name, k in index.items():
+        as_a = results[[p for p, (a, _) in enumerate(pairs) if a == k]].sum(axis=0)
+        as_b = results[[p for p, (_, b) in enumerate(pairs) if b == k]].sum(axis=0)
+        win, loss, tie = as_a + as_b[[1, 0, 2]]  # team B's wins are team A's losses
         standings.append(Standing(name, float(ratings[k]), float(low[k]), float(high[k]),
-                                  len(results), results.count("win"), results.count("loss"),
-                                  results.count("tie")))
+                                  int(win + loss + tie), int(win), int(loss), int(tie)))
     return sorted(standings, key=lambda s: -s.rating)
 
 
@@ -209,7 +203,7 @@ def write_ladder(path: Path, ladder: Ladder, standings: Sequence[Standing],
                  played: Mapping[Pair, Sequence[GameRecord]]) -> None:
     """The standings and each pair's results as JSON (a temporary file, renamed)."""
     pairs = [{"team": a, "vs": b, "games": len(played[(a, b)]),
-              **{result: sum(r.result == result for r in played[(a, b)]) for result in RANKS}}
+              **{result: sum(r.result == result for r in played[(a, b)]) for result in RESULTS}}
              for a, b in ladder.pairs()]
     data = {"policies": list(ladder.policies), "games_per_pair": ladder.games,
             "seed": ladder.seed, "bootstrap": ladder.bootstrap,

@@ -16,15 +16,17 @@ def ladder_table(settings: dict, standings: Sequence[Standing]) -> str:
     """One row per policy, best first: rating, interval, games and wins / losses / ties."""
     lines = [f"Round robin of {len(standings)} policies, {settings['games_per_pair']} games a "
              f"pair (seats balanced), seed {settings['seed']}. Ratings in Elo-like points "
-             f"(openskill's Bradley-Terry model, a tie counted as a draw; mean 0 over the "
+             f"(a Bradley-Terry fit, a tie counted as half a win; mean 0 over the "
              f"ladder): 200 points above a policy means an expected score (a win plus half a "
              f"tie) of 0.76 against it. Intervals: 95% percentile bootstrap over games, "
              f"{settings['bootstrap']} replicates.", "",
              "| # | policy | rating | 95% interval | games | win / loss / tie |",
              "|---:|---|---:|---|---:|---|"]
     for k, s in enumerate(standings, 1):
-        lines.append(f"| {k} | `{s.policy}` | {s.rating:+.0f} | [{s.low:+.0f}, {s.high:+.0f}] "
-                     f"| {s.games} | {s.win} / {s.loss} / {s.tie} |")
+        interval = ("won every game" if s.win == s.games else "lost every game"
+                    if s.loss == s.games else f"[{s.low:+.0f}, {s.high:+.0f}]")
+        lines.append(f"| {k} | `{s.policy}` | {s.rating:+.0f} | {interval} | {s.games} | "
+                     f"{s.win} / {s.loss} / {s.tie} |")
     return "\n".join(lines)
 
 
