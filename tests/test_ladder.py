@@ -160,3 +160,19 @@ def test_records_of_another_match_in_a_pairs_file_are_refused(tmp_path, capsys):
     write_records(path, games("simple", "static", ["tie"] * 4))
     assert main(["--policies", "static,simple_nobomb", "--games", "4", "--out", str(out)]) == 2
     assert "not simple_nobomb vs static" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("damage, told", [
+    (lambda text: text.replace('"tie"', '"draw"', 1), "game 0: result 'draw' is not one of"),
+    (lambda text: text[:-30], "simple_nobomb__vs__static.jsonl:4"),  # cut short
+    (lambda text: text.replace('"seed": 0, ', "", 1), "not an arena records file"),
+])
+def test_a_damaged_pair_file_is_named(tmp_path, capsys, damage, told):
+    out = tmp_path / "ladder"
+    path = pair_path(out, ("simple_nobomb", "static"))
+    path.parent.mkdir(parents=True)
+    write_records(path, games("simple_nobomb", "static", ["tie"] * 4))
+    path.write_text(damage(path.read_text()))
+    assert main(["--policies", "static,simple_nobomb", "--games", "4", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("error:") == 1 and told in err and "Traceback" not in err

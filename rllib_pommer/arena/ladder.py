@@ -56,7 +56,7 @@ RECORDS_DIR = "records"
 LADDER_FILE = "ladder.json"
 FILTERED = "_jitter_action"  # the variant of each learned policy a default ladder also rates
 ELO = 400 / math.log(10)  # Elo points per unit of Bradley-Terry strength
-VIRTUAL_TIES = 1  # a pair's games, as ties, added to every pair
+VIRTUAL_TIES = 1  # tied games that are not played, added to every pair (module docstring)
 BOOTSTRAP = 1000
 RESULTS = ("win", "loss", "tie")  # team A's results, in the order of a pair's row
 
@@ -88,7 +88,8 @@ class Ladder:
                 raise ValueError(f"ladder policies are names in policies/ (each names a records "
                                  f"file), not paths: got {name!r}")
             resolve_policy(name)  # an unknown name fails here, before any game
-        object.__setattr__(self, "policies", tuple(sorted(self.policies)))  # the order is no fact
+        # Sorted: the order the policies are listed in changes nothing.
+        object.__setattr__(self, "policies", tuple(sorted(self.policies)))
 
     def pairs(self) -> list[Pair]:
         return list(itertools.combinations(self.policies, 2))
@@ -112,10 +113,17 @@ def pair_path(folder: Path, pair: Pair) -> Path:
 def _read_pair(ladder: Ladder, path: Path, pair: Pair) -> list[GameRecord]:
     """The pair's records, refused (ValueError naming the file) unless they are exactly this
     ladder's games of this pair."""
-    records = [game_record(row) for row in read_jsonl(path)]
+    try:
+        records = [game_record(row) for row in read_jsonl(path)]
+    except (KeyError, TypeError) as exc:
+        raise ValueError(f"{path}: not an arena records file ({exc!r})") from None
     named = {(r.team, r.vs, tuple(r.filters)) for r in records}
     if named != {(pair[0], pair[1], ())}:
         raise ValueError(f"{path}: holds {sorted(named)[:2]}, not {pair[0]} vs {pair[1]}")
+    unknown = [r for r in records if r.result not in RESULTS]
+    if unknown:
+        raise ValueError(f"{path}: game {unknown[0].game}: result {unknown[0].result!r} is not "
+                         f"one of {list(RESULTS)}")
     seeds = sorted({r.seed for r in records})
     if seeds != [ladder.seed] or sorted(r.game for r in records) != list(range(ladder.games)):
         raise ValueError(
@@ -202,9 +210,9 @@ def rate(ladder: Ladder, played: Mapping[Pair, Sequence[GameRecord]]) -> list[St
 def write_ladder(path: Path, ladder: Ladder, standings: Sequence[Standing],
                  played: Mapping[Pair, Sequence[GameRecord]]) -> None:
     """The standings and each pair's results as JSON (a temporary file, renamed)."""
-    pairs = [{"team": a, "vs": b, "games": len(played[(a, b)]),
-              **{result: sum(r.result == result for r in played[(a, b)]) for result in RESULTS}}
-             for a, b in ladder.pairs()]
+    pairs = [{"team": a, "vs": b, "games": int(row.sum()),
+              **{result: int(count) for result, count in zip(RESULTS, row, strict=True)}}
+             for (a, b), row in zip(ladder.pairs(), _results(ladder, played), strict=True)]
     data = {"policies": list(ladder.policies), "games_per_pair": ladder.games,
             "seed": ladder.seed, "bootstrap": ladder.bootstrap,
             "standings": [asdict(s) for s in standings], "pairs": pairs}
