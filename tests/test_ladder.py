@@ -176,3 +176,28 @@ def test_a_damaged_pair_file_is_named(tmp_path, capsys, damage, told):
     assert main(["--policies", "static,simple_nobomb", "--games", "4", "--out", str(out)]) == 2
     err = capsys.readouterr().err
     assert err.count("error:") == 1 and told in err and "Traceback" not in err
+
+
+def test_an_interrupted_ladder_keeps_its_finished_pairs_and_resumes(tmp_path, capsys,
+                                                                    monkeypatch):
+    """Ctrl-C during the second pair: the first pair's file stays whole, the next run plays the
+    other two pairs only."""
+    played, interrupt_at = [], [1]
+
+    def arena(spec, workers, progress):
+        if len(played) == interrupt_at[0]:
+            raise KeyboardInterrupt
+        played.append((spec.team, spec.vs))
+        return games(spec.team, spec.vs, ["win", "tie"] * (spec.games // 2), spec.seed)
+
+    monkeypatch.setattr("rllib_pommer.ladder.play_match", arena)
+    argv = ["--policies", "random,simple,static", "--games", "4", "--bootstrap", "20",
+            "--out", str(tmp_path)]
+    assert main(argv) == 130
+    assert "interrupted: the pairs finished are kept" in capsys.readouterr().err
+    assert [p.name for p in (tmp_path / "records").iterdir()] == ["random__vs__simple.jsonl"]
+    assert not (tmp_path / LADDER_FILE).exists()
+    interrupt_at[0] = -1
+    assert main(argv) == 0
+    assert "3 pairs of 3 policies: 1 played before, 2 to play" in capsys.readouterr().out
+    assert played == [("random", "simple"), ("random", "static"), ("simple", "static")]
