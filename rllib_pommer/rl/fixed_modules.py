@@ -122,7 +122,8 @@ class FrozenNetModule(TorchRLModule):
         if spec.kind == "learned":
             net = load_policy_net(weights_file(spec))
         else:
-            net = load_checkpoint_net(checkpoint_path(spec))
+            net = load_checkpoint_net(checkpoint_path(spec),
+                                      module=spec.params.get("module", "learner"))
         self.pi = net.requires_grad_(False)
         self.greedy = bool(spec.params.get("greedy", False))
 
