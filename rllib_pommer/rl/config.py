@@ -28,7 +28,7 @@ with the config it started with, so a run keeps its number of env runners when r
 (training.kept_layouts says so); the learner's threads are the command's.
 
 Speed settings, none of which changes what PPO computes (`python -m rllib_pommer.bench learn`
-and `bench train`, one core, figures in the README):
+and `bench train`, one core, figures in docs/measurements.md):
 - the module (rl_module.py) runs pi and vf channels-last and vf under bfloat16 autocast; with
   the fused Adam of learner.py the learner trains 1.21x the samples/s of the same update in plain
   float32 NCHW torch (0.77x before any of these). pi ran under bfloat16 too until the paper

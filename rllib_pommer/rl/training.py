@@ -117,7 +117,7 @@ class Progress(FreshOnRestore):
     """One line per iteration: stage, episodes, win/loss/tie, env steps/s and the time left in the
     stage and in the run, both at the games/s seen since the first result. The run's figure is a
     floor early on, since a curriculum's later games may last longer (the paper campaign's are
-    measured in the README's Speed section), so the line says whose pace it assumes. An iteration
+    measured in docs/measurements.md), so the line says whose pace it assumes. An iteration
     whose learner skipped updates for non-finite gradients (learner.py) says how many."""
 
     def __init__(self):
