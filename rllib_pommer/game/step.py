@@ -364,7 +364,7 @@ def _commit_moves(board, agents, bombs, n_bombs, actions, want, bwant, kicked_by
 def _explode(board, agents, bombs, meta, fire, burn, fresh):
     """§3.11-3.12: tick bombs; detonate (in waves, chains included) into the mask `fire`.
 
-    Kill credit (docs/rules.md, "Who killed whom") rides along without touching the state: each
+    Kill credit (docs/rules.md §9) rides along without touching the state: each
     detonating bomb burns in the name of its owner and of whoever's fire set it off (lingering
     flames' credit from `burn`, this step's from `fresh`), and ORs those agents' bits into `fresh`
     on every cell of its cross.
