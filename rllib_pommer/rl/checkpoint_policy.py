@@ -1,9 +1,11 @@
 """Policy kind "rllib_checkpoint": the learner module of a PPO run, played like any learned policy.
 
 A policy file (`kind = "rllib_checkpoint"`, `checkpoint = "<path>"` relative to the file, optional
-`greedy`) or a bare directory given as a policy name (see `registry.resolve_policy`) names a
-checkpoint folder, a Tune trial folder (its latest `checkpoint_*` is used) or a run folder holding
-one or more trials (the newest checkpoint among them). The learner's pi weights are read straight
+`greedy`, optional `module`) or a bare directory given as a policy name (see
+`registry.resolve_policy`; `DIR@snapshot_2` names a self-play snapshot's module, rl/league.py)
+names a checkpoint folder, a Tune trial folder (its latest `checkpoint_*` is used) or a run folder
+holding one or more trials (the newest checkpoint among them). The module played is the learner's
+unless `module` names another module of the checkpoint. The learner's pi weights are read straight
 from the module's saved state, without rebuilding the RLlib module (which would want the imitation
 weights it started from), into a `PommerNet`, and played by `learned.LearnedPolicy`.
 
@@ -35,7 +37,8 @@ from ..imitation.network import PommerNet
 from ..viz.training import HISTORY_FILE, Trial, number, read_trial, write_summary
 from .curriculum import Curriculum, run_curriculum
 
-MODULE_STATE = Path("learner_group/learner/rl_module/learner/module_state.pkl")
+MODULES_DIR = Path("learner_group/learner/rl_module")
+MODULE_STATE = MODULES_DIR / "learner" / "module_state.pkl"
 ALGORITHM_STATE = "algorithm_state.pkl"
 # A history row's identity across commits (the clock is not: a pack may have repaired it).
 LINEAGE_COLUMNS = ("env_runners/num_env_steps_sampled_lifetime",
@@ -111,12 +114,16 @@ def _load_state(stream: typing.BinaryIO, name: object) -> dict:
     return state
 
 
-def load_checkpoint_net(path: str | Path, part: str = "pi") -> PommerNet:
+def load_checkpoint_net(path: str | Path, part: str = "pi", module: str = "learner") -> PommerNet:
     """The learner's policy network (`part="pi"`) or value network (`"vf"`), eval mode, from a
-    checkpoint, trial or run folder."""
+    checkpoint, trial or run folder; `module` names another module's (a self-play snapshot)."""
     if part not in NET_OUTPUTS:
         raise ValueError(f"part must be one of {list(NET_OUTPUTS)}, got {part!r}")
-    state_file = latest_checkpoint(path) / MODULE_STATE
+    checkpoint = latest_checkpoint(path)
+    state_file = checkpoint / MODULES_DIR / module / "module_state.pkl"
+    if not state_file.is_file():
+        found = sorted(p.parent.name for p in (checkpoint / MODULES_DIR).glob("*/module_state.pkl"))
+        raise ValueError(f"{checkpoint}: no module {module!r}; its modules: {found}")
     state = read_module_state(state_file)
     weights = {str(key).removeprefix(f"{part}."): torch.as_tensor(value)
                for key, value in state.items() if str(key).startswith(f"{part}.")}
@@ -321,9 +328,10 @@ def export_policy(source: str | Path, target: str | Path) -> tuple[Path, Path, P
 
 
 @cache
-def _shared_policy(path: Path, greedy: bool) -> LearnedPolicy:
+def _shared_policy(path: Path, greedy: bool, module: str) -> LearnedPolicy:
     checkpoint = latest_checkpoint(path)
-    return LearnedPolicy(load_checkpoint_net(checkpoint), greedy, checkpoint / MODULE_STATE)
+    return LearnedPolicy(load_checkpoint_net(checkpoint, module=module), greedy,
+                         checkpoint / MODULES_DIR / module / "module_state.pkl")
 
 
 def checkpoint_path(spec: PolicySpec) -> Path:
@@ -333,7 +341,8 @@ def checkpoint_path(spec: PolicySpec) -> Path:
 
 
 def _checkpoint_agent(spec: PolicySpec) -> LearnedAgent:
-    return LearnedAgent(_shared_policy(checkpoint_path(spec), bool(spec.params.get("greedy"))))
+    return LearnedAgent(_shared_policy(checkpoint_path(spec), bool(spec.params.get("greedy")),
+                                       spec.params.get("module", "learner")))
 
 
 register_kind("rllib_checkpoint", _checkpoint_agent)

@@ -10,7 +10,7 @@ env steps (~3,500 learner rows; all four agents step, and the learner's rows are
 trained); value loss coefficient 1 with RLlib's default value clip 10 (returns are within
 [-1, 1]); no KL penalty (the clip does the work); no dual clip (learner.py; a curriculum's
 `dual_clip` sets its bound); gradient norm clip 10; 8 envs per env runner
-(batched inference, rllib-notes I). More envs amortise RLlib's per-step connector and inference
+(batched inference). More envs amortise RLlib's per-step connector and inference
 calls: against SimpleAgents, sampling alone ran 1.16x the env steps/s with 16, 1.47x with 32 and
 1.55x with 64, and whole iterations (4 epochs of learning included) 1.13x with 32 (medians of 4-5
 interleaved rounds in one process, both campaigns on the cores, 2026-12-03). The campaigns and
@@ -28,7 +28,7 @@ with the config it started with, so a run keeps its number of env runners when r
 (training.kept_layouts says so); the learner's threads are the command's.
 
 Speed settings, none of which changes what PPO computes (`python -m rllib_pommer.bench learn`
-and `bench train`, one core, figures in the README):
+and `bench train`, one core, figures in docs/measurements.md):
 - the module (rl_module.py) runs pi and vf channels-last and vf under bfloat16 autocast; with
   the fused Adam of learner.py the learner trains 1.21x the samples/s of the same update in plain
   float32 NCHW torch (0.77x before any of these). pi ran under bfloat16 too until the paper
@@ -65,6 +65,7 @@ from .connectors import LearnerFilters
 from .curriculum import Curriculum
 from .env import ENV_NAME
 from .fixed_modules import fixed_module_spec
+from .league import snapshot_specs
 from .learner import DUAL_CLIP_KEY, PommerPPOLearner
 from .mapping import SeatMapping
 from .rl_module import LEARNER, PommerPPOModule
@@ -121,6 +122,8 @@ def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None
             vf_weights, part="vf"))
     modules = {LEARNER: RLModuleSpec(module_class=PommerPPOModule, model_config=model_config)}
     modules |= {name: fixed_module_spec(name) for name in curriculum.policies()}
+    if curriculum.league:  # built empty; the callback's gate fills them (league.py)
+        modules |= snapshot_specs(curriculum.league)
     return (
         PPOConfig()
         .environment(env, env_config={

@@ -26,7 +26,7 @@ its collapsed end (logit spread ~1,000) by p99 4.0 (max 10) against 0.56
 (`benchmarks/logit_precision.py`). Rounding alone thus swung ratios far past the clip, and with a
 negative advantage PPO weights a row by its whole ratio: the paper campaign's run in bfloat16
 collapsed from ~93,000 games (log-ratio up to 72). Float32 alone did not prevent that (continued
-in float32 from 83,562 games, the run drifted the same way, sooner: README, Results); it removes
+in float32 from 83,562 games, the run drifted the same way, sooner: docs/results.md); it removes
 the rounding, and `learner.py`'s dual clip bounds such rows. Float32 results differ across batch
 sizes (1 to 128 rows against 410) by 1.1e-5 in a log-probability at most (2.4e-4 at the
 collapsed end), far inside the clip.

@@ -31,7 +31,7 @@ import ray
 import torch
 from ray import tune
 
-from . import ray_session, tune_state
+from . import quiet, ray_session, tune_state
 from .checkpoint_policy import trial_dirs, unreadable
 from .config import build_config, check_weights
 from .curriculum import (
@@ -74,7 +74,9 @@ def init_ray(address: str | None, *, num_cpus: int = RunSettings.num_cpus,
     not start, a `RayStartError`."""
     torch.set_num_threads(torch_threads)
     torch.set_flush_denormal(True)
-    job_env = {"env_vars": {LEARNER_THREADS_ENV: str(torch_threads)}}  # for learner.py
+    quiet.silence()  # here, and in every worker through the hook below
+    job_env = {"env_vars": {LEARNER_THREADS_ENV: str(torch_threads)},  # for learner.py
+               "worker_process_setup_hook": "rllib_pommer.rl.quiet.silence"}
     if address is not None and address != "auto":
         host, _, port = address.removeprefix("ray://").rpartition(":")
         try:
@@ -121,7 +123,7 @@ class Progress(FreshOnRestore):
     """One line per iteration: stage, episodes, win/loss/tie, env steps/s and the time left in the
     stage and in the run, both at the games/s seen since the first result. The run's figure is a
     floor early on, since a curriculum's later games may last longer (the paper campaign's are
-    measured in the README's Speed section), so the line says whose pace it assumes. An iteration
+    measured in docs/measurements.md), so the line says whose pace it assumes. An iteration
     whose learner skipped updates for non-finite gradients (learner.py) says how many."""
 
     def __init__(self):
@@ -143,9 +145,19 @@ class Progress(FreshOnRestore):
               f"iter {result['training_iteration']}  episodes {episodes}/{total}  "
               f"W/L/T {runners.get('learner_win', 0):.2f}/{runners.get('learner_loss', 0):.2f}/"
               f"{runners.get('learner_tie', 0):.2f}  return {runners.get('learner_return', 0):+.2f}"
+              f"{_kills(runners)}"
               f"  {steps_per_s:.0f} env steps/s  ETA stage {_eta(stage_end - episodes, rate)}, "
               f"run {_eta(total - episodes, rate)} at this stage's pace{_skipped(result)}",
               flush=True)
+
+
+def _kills(runners: dict) -> str:
+    """Per game: enemies the learner's team killed, and each team's suicides, where logged."""
+    if "learner_kills" not in runners:
+        return ""
+    return (f"  kills {runners['learner_kills']:.2f} (suicides ours "
+            f"{runners.get('learner_suicides', 0):.2f}, theirs "
+            f"{runners.get('learner_opponent_suicides', 0):.2f})")
 
 
 def _skipped(result: dict) -> str:
@@ -256,6 +268,8 @@ def start_run(settings: RunSettings, say=print) -> tuple[Curriculum, Path]:
             ray.shutdown()  # leave the cluster before the error ends the command
             raise
     record_run_curriculum(out, curriculum)
+    say(f"TensorBoard: tensorboard --logdir {out} (Tune's own hint below names a folder of the "
+        f"Ray session under /tmp/ray, not the run's)")
     return curriculum, out
 
 

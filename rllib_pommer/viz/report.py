@@ -9,6 +9,7 @@ from collections import Counter
 from collections.abc import Iterator
 from pathlib import Path
 
+from ..arena.ladder import LADDER_FILE
 from ..game.records import read_games, read_jsonl
 from .behaviour import heatmaps_by_opponent
 from .endings import endings_table, load_endings
@@ -21,6 +22,7 @@ from .figures import (
     plot_training,
 )
 from .frames import load_game
+from .ladder import ladder_section
 from .matches import ROW_KEYS, load_outcomes, rates_by_opponent
 from .paper import paper_table
 from .render import render_game
@@ -41,8 +43,11 @@ SUMMARIES = "runs"  # below the report's folder: one small trial folder per run 
 
 
 def kind_of(path: Path) -> str:
-    """"trials", "records" (arena rows) or "replays", from what the path holds."""
+    """"ladder" (a ladder job's folder), "trials", "records" (arena rows) or "replays", from
+    what the path holds."""
     if path.is_dir():
+        if (path / LADDER_FILE).is_file():
+            return "ladder"
         if not find_trials(path):
             raise ValueError(f"{path}: no Tune trial (progress.csv or result.json) in or below it")
         return "trials"
@@ -59,7 +64,7 @@ def kind_of(path: Path) -> str:
 
 
 def classify(paths: list[Path]) -> dict[str, list[Path]]:
-    found: dict[str, list[Path]] = {"trials": [], "records": [], "replays": []}
+    found: dict[str, list[Path]] = {"trials": [], "records": [], "replays": [], "ladder": []}
     for path in paths:
         kind = kind_of(path)
         found[kind] += find_trials(path) if kind == "trials" else [path]
@@ -134,7 +139,8 @@ def write_report(paths: list[Path], out: Path) -> Path:
     found = classify(paths)
     out.mkdir(parents=True, exist_ok=True)
     parts = ["# Report: our runs in the paper's figures and tables"]
-    makers = {"records": tables_section, "trials": fig3_section, "replays": _fig5_and_game}
+    makers = {"records": tables_section, "ladder": ladder_section, "trials": fig3_section,
+              "replays": _fig5_and_game}
     for kind, maker in makers.items():
         if found[kind]:
             parts += list(maker(found[kind], out))
