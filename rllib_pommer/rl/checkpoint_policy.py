@@ -5,7 +5,8 @@ A policy file (`kind = "rllib_checkpoint"`, `checkpoint = "<path>"` relative to 
 checkpoint folder, a Tune trial folder (its latest `checkpoint_*` is used) or a run folder holding
 one or more trials (the newest checkpoint among them). The learner's pi weights are read straight
 from the module's saved state, without rebuilding the RLlib module (which would want the imitation
-weights it started from), into a `PommerNet`, and played by `learned.LearnedPolicy`.
+weights it started from), into a `PommerNet`, and played as the "learned" kind is
+(`learned.register_learned_kind`: the same path resolution, cache and agents).
 
 A checkpoint folder may come from anyone, and a pickle can name any callable to run while it
 loads: the module state is read by `StateUnpickler`, which builds dicts and numpy arrays and
@@ -24,14 +25,13 @@ import pickletools
 import re
 import subprocess
 import typing
-from functools import cache
 from pathlib import Path
 
 import torch
 
 from ..agents.registry import PolicySpec, policy_names, register_kind, resolve_policy
 from ..game.constants import NUM_ACTIONS
-from ..imitation.learned import LearnedAgent, LearnedPolicy, load_policy_net, weights_file
+from ..imitation.learned import load_policy_net, register_learned_kind
 from ..imitation.network import PommerNet
 from ..viz.training import HISTORY_FILE, Trial, number, read_trial, write_summary
 from .curriculum import Curriculum, load_curriculum
@@ -264,7 +264,7 @@ def starting_policy(run: Path, curriculum: Curriculum, exclude: str = "") -> str
         spec = resolve_policy(name)
         if name == exclude or spec.kind != "learned":
             continue
-        weights = load_policy_net(weights_file(spec)).state_dict()  # both PommerNets: same keys
+        weights = load_policy_net(spec.file("weights")).state_dict()  # both PommerNets: same keys
         if all(torch.equal(weights[key], value) for key, value in start.items()):
             return name
     return None
@@ -323,19 +323,8 @@ def export_policy(source: str | Path, target: str | Path) -> tuple[Path, Path, P
     return weights, policy_file, write_model_card(target)
 
 
-@cache
-def _shared_policy(path: Path, greedy: bool) -> LearnedPolicy:
-    return LearnedPolicy(load_checkpoint_net(path), greedy)
+def _load_checkpoint(path: Path) -> tuple[PommerNet, Path]:
+    return load_checkpoint_net(path), latest_checkpoint(path) / MODULE_STATE
 
 
-def checkpoint_path(spec: PolicySpec) -> Path:
-    if "checkpoint" not in spec.params:
-        raise ValueError(f"{spec.path}: an rllib_checkpoint policy needs a 'checkpoint' key")
-    return (spec.path.parent / spec.params["checkpoint"]).resolve()
-
-
-def _checkpoint_agent(spec: PolicySpec) -> LearnedAgent:
-    return LearnedAgent(_shared_policy(checkpoint_path(spec), bool(spec.params.get("greedy"))))
-
-
-register_kind("rllib_checkpoint", _checkpoint_agent)
+register_learned_kind("rllib_checkpoint", "checkpoint", _load_checkpoint)

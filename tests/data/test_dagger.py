@@ -53,7 +53,7 @@ def test_only_the_clone_is_recorded_and_the_clone_moves_the_game(tmp_path):
 
 def test_same_seed_same_data_and_a_changed_clone_is_refused(tmp_path):
     policy = _policy(tmp_path)
-    dagger = Dagger(policy, ("simple", "static"))
+    dagger = Dagger(policy, ("simple", "static"), greedy_actor)
     Collection(tmp_path / "a", 4, 5, 2, DRAWS, dagger).run(workers=1)
     assert collect_main(["--games", "4", "--out", str(tmp_path / "b"), "--seed", "5",
                          "--shard-games", "2", "--workers", "1", "--label-draws", str(DRAWS),
@@ -71,8 +71,8 @@ def test_same_seed_same_data_and_a_changed_clone_is_refused(tmp_path):
 def test_dagger_needs_label_draws_and_known_opponents(tmp_path):
     policy = _policy(tmp_path)
     with pytest.raises(ValueError, match="label-draws"):
-        Collection(tmp_path / "x", 4, 5, 2, 0, Dagger(policy, ("simple",)))
+        Collection(tmp_path / "x", 4, 5, 2, 0, Dagger(policy, ("simple",), greedy_actor))
     with pytest.raises(ValueError, match="opponents.*random"):
-        Collection(tmp_path / "y", 4, 5, 2, DRAWS, Dagger(policy, ("random",)))
+        Collection(tmp_path / "y", 4, 5, 2, DRAWS, Dagger(policy, ("random",), greedy_actor))
     with pytest.raises(ValueError, match="not a plain learned policy"):
-        Collection(tmp_path / "z", 4, 5, 2, DRAWS, Dagger("simple", ("static",)))
+        Collection(tmp_path / "z", 4, 5, 2, DRAWS, Dagger("simple", ("static",), greedy_actor))
