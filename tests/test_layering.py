@@ -95,6 +95,11 @@ def test_curricula_are_checked_without_ray_or_torch(tmp_path):
     assert _loaded(modules, ("ray", "torch", "gymnasium"), check) == ""
 
 
+def test_runs_are_reported_without_ray_or_torch():
+    """The report job and the run history it reads (rl/history.py, Ray-free like the curriculum)."""
+    assert _loaded(["rllib_pommer.report", "rllib_pommer.rl.history"], ("ray", "torch")) == ""
+
+
 def test_nothing_below_rl_imports_rl():
     """Data flows one way: the game, agents, data, imitation, arena and the user envs never
     reach up into rl/, not even its Ray-free modules (the reward modes are the game's)."""
@@ -220,7 +225,8 @@ def test_a_violation_planted_in_a_copy_of_the_package_fails(tmp_path):
                            ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.so"))
     collector = copy / "data" / "collector.py"
     planted = "    from ..imitation.learned import greedy_actor"
-    text = f"{collector.read_text()}\n\ndef _actor(name):\n{planted}\n    return greedy_actor(name)\n"
+    text = (f"{collector.read_text()}\n\ndef _actor(name):\n{planted}\n"
+            "    return greedy_actor(name)\n")
     collector.write_text(text)
     line = text.splitlines().index(planted) + 1
     assert import_violations(copy, import_table(DOC)) == [

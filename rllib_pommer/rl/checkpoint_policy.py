@@ -29,12 +29,20 @@ from pathlib import Path
 
 import torch
 
-from ..agents.registry import PolicySpec, policy_names, register_kind, resolve_policy
+from ..agents.registry import policy_names, resolve_policy
 from ..game.constants import NUM_ACTIONS
 from ..imitation.learned import load_policy_net, register_learned_kind
 from ..imitation.network import PommerNet
-from ..viz.training import HISTORY_FILE, Trial, number, read_trial, write_summary
 from .curriculum import Curriculum, load_curriculum
+from .history import (
+    HISTORY_FILE,
+    POLICY_HISTORY_DIR,
+    POLICY_SOURCE_FILE,
+    Trial,
+    number,
+    read_trial,
+    write_summary,
+)
 
 MODULE_STATE = Path("learner_group/learner/rl_module/learner/module_state.pkl")
 ALGORITHM_STATE = "algorithm_state.pkl"
@@ -272,7 +280,7 @@ def starting_policy(run: Path, curriculum: Curriculum, exclude: str = "") -> str
 
 def _source(policy: str, checkpoint: Path, trial: Trial, iteration: int,
             curriculum: Curriculum) -> dict:
-    """What `viz/model_card.py` says of where a policy came from."""
+    """Where a policy came from, as its model card says (`viz/model_card.py`)."""
     run = checkpoint.parents[1]
     return {
         "policy": policy, "run": run.name, "trial": trial.path.name,
@@ -285,17 +293,17 @@ def _source(policy: str, checkpoint: Path, trial: Trial, iteration: int,
     }
 
 
-def export_policy(source: str | Path, target: str | Path) -> tuple[Path, Path, Path]:
+def export_policy(source: str | Path, target: str | Path) -> tuple[Path, Path]:
     """Ship the learner of a checkpoint, trial or run folder as a policy like `imitation`:
     `target/pi.pt`, a plain state_dict that `torch.load(weights_only=True)` reads, its value
     network as `target/vf.pt` (for a run that continues it: a curriculum's `vf_weights`),
-    `target.toml` (kind learned, sampling, as the arena plays a run folder) and the model card
-    `target/MODEL_CARD.md` with what it is drawn from (viz/model_card.py): the trial's rows up to
-    the checkpoint and `source.json`. Existing weights or policy files are never replaced."""
-    # imported here: bc loads TensorBoard and the dataset reader, the card matplotlib, which
-    # playing a checkpoint never needs
+    `target.toml` (kind learned, sampling, as the arena plays a run folder), and what its model
+    card is drawn from (`history.exported_training`; the job draws the card): the trial's rows up
+    to the checkpoint and `source.json`. Existing weights or policy files are never replaced."""
+    # imported here: bc loads TensorBoard and the dataset reader, the card's module matplotlib,
+    # which playing a checkpoint never needs
     from ..imitation.bc import WEIGHTS_FILE, write_policy_file
-    from ..viz.model_card import CARD_FILE, SOURCE_FILE, TRAINING_DIR, write_model_card
+    from ..viz.model_card import CARD_FILE
 
     checkpoint = latest_checkpoint(source).resolve()
     net = load_checkpoint_net(checkpoint)
@@ -316,11 +324,11 @@ def export_policy(source: str | Path, target: str | Path) -> tuple[Path, Path, P
     torch.save(load_checkpoint_net(checkpoint, "vf").state_dict(), target / VF_WEIGHTS_FILE)
     write_policy_file(target, f"PPO learner exported from {checkpoint.parent.name}/"
                               f"{checkpoint.name}; see {target.name}/{CARD_FILE}", greedy=False)
-    write_summary(Trial(trial.path, rows), target / TRAINING_DIR / trial.name)
-    (target / SOURCE_FILE).write_text(json.dumps(
+    write_summary(Trial(trial.path, rows), target / POLICY_HISTORY_DIR / trial.name)
+    (target / POLICY_SOURCE_FILE).write_text(json.dumps(
         _source(target.name, checkpoint, Trial(trial.path, rows), iteration, curriculum),
         indent=1) + "\n")
-    return weights, policy_file, write_model_card(target)
+    return weights, policy_file
 
 
 def _load_checkpoint(path: Path) -> tuple[PommerNet, Path]:

@@ -29,9 +29,8 @@ from rllib_pommer.rl.checkpoint_policy import (
     load_checkpoint_net,
     packed_commits,
 )
+from rllib_pommer.rl.history import HISTORY_FILE, POLICY_HISTORY_DIR, read_trial
 from rllib_pommer.train import main
-from rllib_pommer.viz.model_card import TRAINING_DIR
-from rllib_pommer.viz.training import HISTORY_FILE, read_trial
 
 REPO = Path(__file__).resolve().parents[2]
 COLUMNS = ("training_iteration", "time_total_s", "env_runners/num_env_steps_sampled_lifetime",
@@ -215,7 +214,7 @@ def test_the_committed_campaign_exports_to_its_checkpoint(tmp_path, committed_ca
     assert re.search(rf"{games:,} of 100,000 games", card)
     assert f"iteration {iteration:,}" in card
     assert "pi started from `imitation_v2`" in card  # the soft-target clone, before DAgger
-    kept = read_trial(target / TRAINING_DIR / "paper").rows
+    kept = read_trial(target / POLICY_HISTORY_DIR / "paper").rows
     assert int(float(kept[-1]["training_iteration"])) == iteration
     net = load_checkpoint_net(checkpoint)
     weights = torch.load(target / "pi.pt", weights_only=True)
