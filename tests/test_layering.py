@@ -122,12 +122,13 @@ def import_table(doc: Path) -> dict[str, set[str]]:
     """Package -> the packages it may import, from the Markdown table under `TABLE_HEADING`:
     each row names a package (`game/`, or `*.py` for the jobs) and, in backquotes, the packages
     it may import (`*`: any)."""
-    section = doc.read_text().split(TABLE_HEADING, 1)[1].split("\n## ", 1)[0]
+    section = doc.read_text().split(TABLE_HEADING, 1)[1].lstrip("\n")
+    rows = section[section.index("\n|"):].strip("\n").split("\n\n", 1)[0]  # the first table
     table = {}
-    for line in section.splitlines():
+    for line in rows.splitlines():
         cells = [cell.strip() for cell in line.strip().strip("|").split("|")]
         if len(cells) != 2 or not cells[0].startswith("`"):
-            continue
+            continue  # the header and its rule
         names = [re.findall(r"`([^`]+)`", cell) for cell in cells]
         table[names[0][0].rstrip("/")] = {name.rstrip("/") for name in names[1]}
     return table

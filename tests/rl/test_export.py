@@ -5,6 +5,7 @@ card drawn from the run up to the exported checkpoint; `report --card` redraws i
 from __future__ import annotations
 
 import csv
+import hashlib
 import json
 import pickle
 import re
@@ -18,6 +19,10 @@ import pytest
 import torch
 
 from rllib_pommer.arena.match import MatchSpec, play_match
+from rllib_pommer.data.collector import Collection, Dagger
+from rllib_pommer.game.constants import NUM_AGENTS
+from rllib_pommer.game.engine import Games
+from rllib_pommer.imitation.learned import greedy_actor
 from rllib_pommer.imitation.network import PommerNet
 from rllib_pommer.report import main as report
 from rllib_pommer.rl.checkpoint_policy import (
@@ -253,3 +258,24 @@ def test_the_card_lists_the_packs_the_exported_rows_came_through(tmp_path):
     assert packed_commits(run, trial_now) == [last, first]
     trial_now.rows = trial_now.rows[:2]  # exported at iteration 2: before the last pack
     assert packed_commits(run, trial_now) == [first]
+
+
+def test_a_run_is_dagger_s_clone_from_any_working_directory(tmp_path, monkeypatch):
+    """Both learned kinds resolve their paths one way, against the policy file: a checkpoint
+    policy's relative `checkpoint` works from another working directory, and DAgger's actor
+    names the module state it read (its weights' fingerprint), not the run folder."""
+    torch.manual_seed(4)
+    trial = _fake_run(tmp_path / "run", PommerNet())
+    policy = tmp_path / "ppo_run.toml"
+    policy.write_text('kind = "rllib_checkpoint"\ncheckpoint = "run"\ngreedy = true\n')
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    for name in (str(policy), str(tmp_path / "run")):
+        act, source = greedy_actor(name)
+        assert source == (trial / "checkpoint_000002" / MODULE_STATE).resolve()
+        obs = Games(1).reset([0]).agent_rows()
+        assert act(obs).shape == (NUM_AGENTS,)
+    planned = Collection(tmp_path / "dagger", 2, 0, 2, 4, Dagger(str(policy), ("static",),
+                                                                 greedy_actor)).plan[0]
+    assert planned.policy_sha256 == hashlib.sha256(source.read_bytes()).hexdigest()
