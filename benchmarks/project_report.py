@@ -4,8 +4,9 @@
 
 Inputs, all found in the repository: the campaigns' packed runs (`campaign/*`, Fig. 3 and the
 stage table), the arena records of the shipped policies (`docs/report/records/<policy>/*.jsonl`,
-Tables 2 and 3 and Fig. 4) and, for Fig. 5 and the game a person can watch, replays this script
-plays itself: each of `FIG5_TEAMS` against each of `FIG5_OPPONENTS`, `FIG5_GAMES` games (the
+Tables 2 and 3 and Fig. 4), the ladder if one has been built in `docs/report/ladder` (its
+command: README) and, for Fig. 5 and the game a person can watch, replays this script plays
+itself: each of `FIG5_TEAMS` against each of `FIG5_OPPONENTS`, `FIG5_GAMES` games (the
 paper's 50), seats balanced, seed 0. Replays are regenerated each time (about a minute) into
 `build/report_replays/` and not committed: same policies and seed, same games. A campaign still
 training is drawn as far as it has logged. Not part of CI.
@@ -18,11 +19,13 @@ import os
 import sys
 from pathlib import Path
 
+from rllib_pommer.arena.ladder import LADDER_FILE
 from rllib_pommer.evaluate import main as evaluate
 from rllib_pommer.viz.report import write_report
 
 REPO = Path(__file__).resolve().parents[1]
 REPORT = Path("docs/report")
+LADDER = REPORT / "ladder"
 REPLAYS = Path("build/report_replays")
 FIG5_TEAMS = ("ppo", "ppo_cautious", "ppo_team")
 FIG5_OPPONENTS = ("simple", "simple_nobomb", "static")  # the first game of the first is shown
@@ -55,7 +58,8 @@ def main(argv: list[str] | None = None) -> int:
     records = sorted((REPORT / "records").glob("*/*.jsonl"))
     if not runs or not records:
         raise SystemExit(f"{REPO}: needs campaign/* and {REPORT}/records/*/*.jsonl")
-    report = write_report([*runs, *records, *play_replays(args.workers)], REPORT)
+    ladders = [LADDER] if (LADDER / LADDER_FILE).is_file() else []
+    report = write_report([*runs, *records, *ladders, *play_replays(args.workers)], REPORT)
     print(f"wrote {report} from {len(runs)} run(s) and {len(records)} record file(s)")
     return 0
 

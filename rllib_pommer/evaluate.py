@@ -2,14 +2,16 @@
 
 Plays N Team games of policy A against policy B on all cores, half of them with A on seats {0, 2}
 and half on {1, 3} (`--fixed-seats`: always {0, 2}), and prints A's win/loss/tie rates with 95%
-Wilson intervals, the mean game length and A's agents lost to their own bombs. `--records FILE`
+Wilson intervals, the mean game length, A's agents lost to their own bombs, and per game who
+killed whom (each team's kills, suicides and team kills: `game/kills.py`). `--records FILE`
 writes one row per game (.jsonl or .csv) with the columns
 
     game, seed, seats_a, result (win/loss/tie for A), length, died, own_bomb_deaths, bombs_laid,
-    team, vs, filters
+    team, vs, filters, killers
 
-(died, own_bomb_deaths and bombs_laid by seat 0..3; the last three name the match, so
-`python -m rllib_pommer.report` reads the file alone), from which every table can be recomputed.
+(died, own_bomb_deaths, bombs_laid and killers by seat 0..3; team, vs and filters name the match,
+so `python -m rllib_pommer.report` reads the file alone), from which every table can be
+recomputed.
 Same seed, same records.
 `--record K` also writes the first K games as replays in the reference's JSON Lines schema
 (`--replays FILE`, with every agent's observations if `--with-observations`), for
@@ -62,6 +64,10 @@ def format_summary(spec: MatchSpec, summary: dict) -> str:
         f"  mean length {summary['mean_length']:.1f}; "
         f"agents lost to their own bombs {summary['own_bomb_deaths_a']}; "
         f"bombs per agent {summary['bombs_per_agent_a']:.2f} vs {summary['bombs_per_agent_b']:.2f}",
+        "  per game, ours vs theirs: " + "; ".join(
+            f"{label} {summary[f'{key}_a_per_game']:.2f} vs {summary[f'{key}_b_per_game']:.2f}"
+            for label, key in (("kills", "kills"), ("suicides", "suicides"),
+                               ("team kills", "team_kills"))),
     ])
 
 

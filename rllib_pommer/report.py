@@ -11,7 +11,9 @@ Each input is classified by its content:
   the layout of the paper's Tables 2 and 3 beside the paper's numbers, and Fig. 4, the effect of
   the filters;
 - a .jsonl[.gz] file of game replays (`evaluate --record K`) gives Fig. 5, the position and bomb
-  heatmaps per opponent, and a picture and a viewer of its first game.
+  heatmaps per opponent, and a picture and a viewer of its first game;
+- a ladder's folder (`python -m rllib_pommer.ladder --out DIR`, holding ladder.json) gives the
+  ladder: each policy's rating with its interval, as a plot and a table.
 
 `--card POLICY_DIR` instead redraws the model card of a policy that `train --export` shipped
 (POLICY_DIR/MODEL_CARD.md: its training from the folder itself, the results tables and Fig. 4
@@ -31,7 +33,7 @@ from .viz.report import SUMMARIES, classify, write_report
 
 def _records(paths: list[Path]) -> list[Path]:
     found = classify(paths)
-    if found["runs"] or found["replays"]:
+    if any(paths for kind, paths in found.items() if kind != "records"):
         raise ValueError("--card takes arena record files only (its training comes from the "
                          "policy folder)")
     return found["records"]
@@ -57,7 +59,7 @@ def main(argv: list[str] | None = None) -> int:
             found = classify(args.inputs)
             training = (run_training(found["runs"], args.out / SUMMARIES)
                         if found["runs"] else None)
-            report = write_report(args.out, training, found["records"], found["replays"])
+            report = write_report(args.out, found, training)
     except (ValueError, OSError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

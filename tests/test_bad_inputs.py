@@ -15,7 +15,7 @@ import pyarrow.parquet as pq
 import pytest
 import tomllib
 
-from rllib_pommer import collect, imitate, replay, serve
+from rllib_pommer import collect, imitate, ladder, replay, serve
 from rllib_pommer.data.collector import Collection
 from rllib_pommer.data.schema import SHARD_KEY
 from rllib_pommer.game.records import write_games
@@ -166,6 +166,27 @@ CASES = [
      "a_file is a file, not a folder"),
     ("serve --port 70000", serve, lambda t, r, s: ["--policy", "static", "--port", "70000"],
      "--port must be in 0..65535, got 70000"),
+    ("ladder unknown policy", ladder,
+     lambda t, r, s: ["--policies", "static,nosuch", "--out", str(t / "l")],
+     "unknown policy 'nosuch'"),
+    ("ladder --games 0", ladder,
+     lambda t, r, s: ["--policies", "static,simple", "--games", "0", "--out", str(t / "l")],
+     "games a pair must be a positive number, got 0"),
+    ("ladder --games abc", ladder,
+     lambda t, r, s: ["--policies", "static,simple", "--games", "abc", "--out", str(t / "l")],
+     "argument --games: invalid int value: 'abc'"),
+    ("ladder --bootstrap 0", ladder,
+     lambda t, r, s: ["--policies", "static,simple", "--bootstrap", "0", "--out", str(t / "l")],
+     "bootstrap replicates must be at least 1, got 0"),
+    ("ladder of one policy", ladder,
+     lambda t, r, s: ["--policies", "static,static", "--out", str(t / "l")],
+     "a ladder needs at least two policies, got ['static', 'static']"),
+    ("ladder policy by path", ladder,
+     lambda t, r, s: ["--policies", "static,policies/simple.toml", "--out", str(t / "l")],
+     "not paths: got 'policies/simple.toml'"),
+    ("ladder --out a file", ladder,
+     lambda t, r, s: ["--policies", "static,simple", "--out", str(_a_file(t))],
+     "a_file is a file, not a folder"),
 ]
 
 

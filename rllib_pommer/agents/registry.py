@@ -105,7 +105,8 @@ KINDS: dict[str, Kind] = {
     "learned": Kind(None, "rllib_pommer.imitation.learned",
                     {"weights": (str, True), "greedy": (bool, False)}, "net"),
     "rllib_checkpoint": Kind(None, "rllib_pommer.rl.checkpoint_policy",
-                             {"checkpoint": (str, True), "greedy": (bool, False)}, "net"),
+                             {"checkpoint": (str, True), "greedy": (bool, False),
+                              "module": (str, False)}, "net"),
 }
 
 
@@ -179,6 +180,11 @@ def resolve_policy(name_or_path: str | os.PathLike) -> PolicySpec:
         if path.is_dir():  # a PPO run, trial or checkpoint folder: play its learner
             return PolicySpec(path.name, "rllib_checkpoint", f"learner of {path}", path,
                               {"checkpoint": str(path.resolve())})
+        folder, _, module = os.fspath(name_or_path).rpartition("@")
+        if folder and Path(folder).is_dir():  # DIR@MODULE: another module of it (a snapshot)
+            return PolicySpec(f"{Path(folder).name}@{module}", "rllib_checkpoint",
+                              f"module {module} of {folder}", Path(folder),
+                              {"checkpoint": str(Path(folder).resolve()), "module": module})
         if not path.is_file():
             raise ValueError(f"policy file {path} does not exist")
         return _load_spec(path, ())

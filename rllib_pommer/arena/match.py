@@ -25,6 +25,7 @@ from ..agents.registry import make_agent
 from ..game.blast import mark_blast
 from ..game.constants import TEAM_PRESET, Action
 from ..game.engine import Games
+from ..game.kills import killer_seats
 from ..game.records import GameRecorder
 from ..game.seeding import game_seeds
 from ..game.state import (
@@ -190,7 +191,8 @@ def _play_chunk(spec: MatchSpec, games: Sequence[int],
         records.append(GameRecord(
             g, spec.seed, list(seats_a), result, int(stats.length[i]),
             (state.agents[i, :, A_ALIVE] == 0).tolist(), stats.own_bomb_deaths[i].tolist(),
-            stats.bombs_laid[i].tolist(), spec.team, spec.vs, list(spec.filters)))
+            stats.bombs_laid[i].tolist(), spec.team, spec.vs, list(spec.filters),
+            [killer_seats(mask) for mask in engine.killers[i]]))
     return records, [recorders[i].finish() for i in sorted(recorders)]
 
 

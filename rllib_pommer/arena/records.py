@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from ..game.constants import TEAM_PRESET
+from ..game.kills import deaths_by_cause, kills_of_team
 from .rates import wilson
 
 
@@ -32,6 +33,28 @@ class GameRecord:
     team: str = ""
     vs: str = ""
     filters: list[str] = field(default_factory=list)
+    # By seat, the seats whose fire it died in (game/kills.py); [] for the living. None in
+    # records written before the engine credited kills.
+    killers: list[list[int]] | None = None
+
+    def kill_counts(self) -> dict[str, int] | None:
+        """Per team ("a", "b"): enemies it killed, its own agents' suicides (an own bomb among
+        the fire they died in) and team kills; None without kill credit."""
+        if self.killers is None:
+            return None
+        masks = [sum(1 << k for k in seats) for seats in self.killers]
+        counts = {}
+        for side, seats in (("a", self.seats_a),
+                            ("b", [s for s in range(4) if s not in self.seats_a])):
+            causes = deaths_by_cause(seats, self.died, masks)
+            counts[f"kills_{side}"] = kills_of_team(seats[0], self.died, masks)
+            counts[f"suicides_{side}"] = causes["self"]
+            counts[f"team_kills_{side}"] = causes["teammate"]
+        return counts
+
+
+KILL_COUNTS = tuple(f"{what}_{side}" for what in ("kills", "suicides", "team_kills")
+                    for side in ("a", "b"))
 
 
 def summarise(records: Sequence[GameRecord]) -> dict:
@@ -62,6 +85,12 @@ def summarise(records: Sequence[GameRecord]) -> dict:
         r.result == "loss" and all(r.own_bomb_deaths[s] for s in r.seats_a) for r in records) / n
     out["tie_at_step_limit"] = sum(
         r.result == "tie" and r.length >= TEAM_PRESET.max_steps for r in records) / n
+    counts = [r.kill_counts() for r in records]
+    if all(c is not None for c in counts):  # per game, with 95% intervals
+        for key in KILL_COUNTS:
+            values = np.array([c[key] for c in counts], float)
+            out[f"{key}_per_game"] = float(values.mean())
+            out[f"{key}_per_game_ci95"] = _mean_ci(values)
     return out
 
 
@@ -70,16 +99,22 @@ def _mean_ci(values: np.ndarray) -> list[float]:
     return [float(values.mean() - half), float(values.mean() + half)]
 
 
-LIST_COLUMNS = ("seats_a", "died", "own_bomb_deaths", "bombs_laid", "filters")
+LIST_COLUMNS = ("seats_a", "died", "own_bomb_deaths", "bombs_laid", "filters", "killers")
 
 
 def game_record(row: dict) -> GameRecord:
     """A records file's row (`matches.read_rows`: list columns of a .csv are JSON text) as the
     GameRecord it was written from."""
-    fields = {k: json.loads(v) if k in LIST_COLUMNS and isinstance(v, str) else v
+    fields = {k: _list_column(v) if k in LIST_COLUMNS and isinstance(v, str) else v
               for k, v in row.items()}
     return GameRecord(**{**fields, "game": int(fields["game"]), "seed": int(fields["seed"]),
                          "length": int(fields["length"])})
+
+
+def _list_column(text: str) -> list | None:
+    """A list column of a .csv row: JSON text, or empty for a column the game had no value in
+    (`killers` of records without kill credit)."""
+    return json.loads(text) if text else None
 
 
 def record_rows(records: Sequence[GameRecord]) -> Iterator[dict]:

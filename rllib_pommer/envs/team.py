@@ -6,11 +6,13 @@ PettingZoo env and the single-agent Gymnasium env (this package) play the same e
 same observations and rewards, and only the RLlib one pays for importing Ray.
 
 An agent that dies gets its last observation and its final reward, then leaves; the game ends for
-everyone when the engine says so (a team wiped out, or the step limit, a tie). Rewards are zero
-until an agent's last step, where `reward_mode` ("shaped", the paper's, or "raw", the engine's;
-`game/rewards.py`) decides them.
+everyone when the engine says so (a team wiped out, or the step limit, a tie). `reward_mode`
+(`game/rewards.py`: "shaped", the paper's; "raw", the engine's; "shaped_credit" and "raw_kills",
+which pay only the kills credited to the agent's team) decides the reward at an agent's last step
+and, for "raw_kills", on the steps its team kills.
 
-The final infos carry `winners` (seats, empty on a tie), so callbacks can log the true outcome
+The final infos carry `winners` (seats, empty on a tie), `died` and `killers` (every seat's
+kill-credit mask, `game/kills.py`), so callbacks can log the true outcome and who killed whom
 whatever the reward mode. Each reset also draws, from the env's seeded stream, whether the learner's
 action filter and jitter correction are on for the episode (`filters` in every info), so the
 episode's filters replay with its seed. `set_stage` changes reward mode and filter probabilities.
@@ -35,7 +37,7 @@ from ..game.constants import BOARD_SIZE, NUM_ACTIONS, NUM_AGENTS, TEAM_PRESET
 from ..game.engine import Game
 from ..game.observation import Observation
 from ..game.raw_codec import RAW_SIZE, pack_raw
-from ..game.rewards import check_reward_mode, final_reward
+from ..game.rewards import check_reward_mode, final_reward, kill_reward
 from ..imitation.features import NUM_PLANES, featurize
 from ..viz.frames import state_frame
 from ..viz.render import draw_frame
@@ -127,18 +129,22 @@ class MultiAgentTeam:
         obs, engine_rewards, done, info = self.game.step(actions)
         self.last_observation = obs
         alive = self.game.batch.alive[0]
+        killers = self.game.batch.killers[0].tolist()
         all_obs = agent_observations(obs, self.observation_form)
         acting, self.agents = self.agents, []
+        newly_dead = [agent for agent in acting if not alive[agent]]
         observations, rewards, terminateds, infos = {}, {}, {}, {}
         for agent in acting:
             observations[agent] = all_obs[agent]
             infos[agent] = {"filters": self._filters}
             leaves = done or not alive[agent]
             terminateds[agent] = leaves
-            rewards[agent] = final_reward(self.reward_mode, agent, done, info,
-                                          engine_rewards[agent], alive) if leaves else 0.0
+            rewards[agent] = kill_reward(self.reward_mode, agent, newly_dead, killers) + (
+                final_reward(self.reward_mode, agent, done, info, engine_rewards[agent], alive,
+                             killers) if leaves else 0.0)
             if done:
-                infos[agent]["winners"] = info.get("winners", [])
+                infos[agent].update(winners=info.get("winners", []), killers=killers,
+                                    died=(~alive).tolist())
             if not leaves:
                 self.agents.append(agent)
         terminateds["__all__"] = done

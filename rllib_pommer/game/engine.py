@@ -21,15 +21,16 @@ from .step import step_game
 
 
 @njit(cache=True)
-def _step_batch(board, agents, bombs, flames, items, meta, actions, rewards, results,
-                game_type, max_steps, blast_cap, view_radius, o_board, o_blast, o_life, o_dir,
-                o_flame, o_pos, o_ammo, o_strength, o_kick, o_alive, o_type, o_step):
+def _step_batch(board, agents, bombs, flames, items, meta, actions, rewards, results, burn,
+                killers, game_type, max_steps, blast_cap, view_radius, o_board, o_blast, o_life,
+                o_dir, o_flame, o_pos, o_ammo, o_strength, o_kick, o_alive, o_type, o_step):
     """Step every game that is not done yet and observe it; done games are left untouched."""
     for n in range(board.shape[0]):
         if meta[n, M_DONE] != 0:
             continue
         results[n] = step_game(board[n], agents[n], bombs[n], flames[n], items[n], meta[n],
-                               actions[n], rewards[n], game_type, max_steps, blast_cap)
+                               actions[n], rewards[n], game_type, max_steps, blast_cap,
+                               burn[n], killers[n])
         observe_game(board[n], agents[n], bombs[n], flames[n], meta[n], view_radius, game_type,
                      o_board[n], o_blast[n], o_life[n], o_dir[n], o_flame[n], o_pos[n],
                      o_ammo[n], o_strength[n], o_kick[n], o_alive[n], o_type[n], o_step[n])
@@ -79,7 +80,13 @@ def _is_integer(x) -> bool:
 
 
 class Games:
-    """N games of one preset, stepped together (the batched API)."""
+    """N games of one preset, stepped together (the batched API).
+
+    Beside the state the engine keeps who killed whom (`game/kills.py`): `killers` (N, 4), for
+    each dead agent the bit mask of the agents whose fire it died in (0 while alive, or when the
+    fire predates a loaded state), and `burn` (N, S, S), the same credit for the fire on each
+    cell. Neither is part of the reference's state, so neither is serialized or compared.
+    """
 
     def __init__(self, num_games: int, config: GameConfig = TEAM_PRESET):
         if num_games <= 0:
@@ -89,6 +96,8 @@ class Games:
         self.obs: Observation = empty_observations(num_games, config.board_size)
         self.rewards = np.zeros((num_games, NUM_AGENTS), np.int64)
         self.results = np.full(num_games, int(Result.INCOMPLETE), np.int64)
+        self.burn = np.zeros((num_games, config.board_size, config.board_size), np.uint8)
+        self.killers = np.zeros((num_games, NUM_AGENTS), np.uint8)
 
     @property
     def num_games(self) -> int:
@@ -109,15 +118,19 @@ class Games:
             raise ValueError(f"reset: {len(seeds)} seeds for {len(indices)} games")
         for index, seed in zip(indices, seeds, strict=True):
             reset_game(self.state, index, np.random.default_rng(seed), self.config)
-            self.rewards[index] = 0
-            self.results[index] = Result.INCOMPLETE
+            self._clear(index)
         return self.observe()
 
     def load(self, index: int, state: Mapping) -> None:
         """Put a reference state dict into slot `index` (validated; see serialize.load_state)."""
         load_state(state, self.state, index)
+        self._clear(index)
+
+    def _clear(self, index: int) -> None:
         self.rewards[index] = 0
         self.results[index] = Result.INCOMPLETE
+        self.burn[index] = 0
+        self.killers[index] = 0
 
     def dump(self, index: int) -> dict:
         return dump_state(self.state, index, self.config.game_type)
@@ -136,7 +149,8 @@ class Games:
         acts = validate_actions(actions, self.num_games)
         s, o, c = self.state, self.obs, self.config
         _step_batch(s.board, s.agents, s.bombs, s.flames, s.items, s.meta, acts, self.rewards,
-                    self.results, int(c.game_type), c.max_steps, c.blast_cap, c.view_radius,
+                    self.results, self.burn, self.killers, int(c.game_type), c.max_steps,
+                    c.blast_cap, c.view_radius,
                     *_kernel_outputs(o))
         return o, self.rewards, self.done, self.results
 

@@ -361,16 +361,27 @@ def _commit_moves(board, agents, bombs, n_bombs, actions, want, bwant, kicked_by
 
 
 @njit(cache=True)
-def _explode(board, agents, bombs, meta, fire):
-    """§3.11-3.12: tick bombs; detonate (in waves, chains included) into the mask `fire`."""
+def _explode(board, agents, bombs, meta, fire, burn, fresh):
+    """§3.11-3.12: tick bombs; detonate (in waves, chains included) into the mask `fire`.
+
+    Kill credit (docs/rules.md, "Who killed whom") rides along without touching the state: each
+    detonating bomb burns in the name of its owner and of whoever's fire set it off (lingering
+    flames' credit from `burn`, this step's from `fresh`), and ORs those agents' bits into `fresh`
+    on every cell of its cross.
+    """
     n_bombs = meta[M_BOMBS]
+    size = board.shape[0]
+    credit = np.empty(n_bombs, np.uint8)
+    cross = np.empty((size, size), np.uint8)
     pending = False
     for b in range(n_bombs):
+        credit[b] = 1 << bombs[b, B_OWNER]
         bombs[b, B_LIFE] -= 1
         if bombs[b, B_LIFE] == 0:
             pending = True
         elif board[bombs[b, B_ROW], bombs[b, B_COL]] == FLAMES:
             bombs[b, B_LIFE] = 0
+            credit[b] |= burn[bombs[b, B_ROW], bombs[b, B_COL]]
             pending = True
     while pending:
         pending = False
@@ -378,22 +389,34 @@ def _explode(board, agents, bombs, meta, fire):
         for b in range(n_bombs):
             if bombs[b, B_LIFE] != 0:
                 bombs[kept] = bombs[b]
+                credit[kept] = credit[b]
                 kept += 1
                 continue
             owner = bombs[b, B_OWNER]
             agents[owner, A_AMMO] = min(agents[owner, A_AMMO] + 1, MAX_AMMO)
-            mark_blast(board, fire, bombs[b, B_ROW], bombs[b, B_COL], bombs[b, B_BLAST])
+            cross[:] = 0
+            mark_blast(board, cross, bombs[b, B_ROW], bombs[b, B_COL], bombs[b, B_BLAST])
+            for r in range(size):
+                for c in range(size):
+                    if cross[r, c] != 0:
+                        fire[r, c] = 1
+                        fresh[r, c] |= credit[b]
         n_bombs = kept
         for b in range(n_bombs):
-            if fire[bombs[b, B_ROW], bombs[b, B_COL]] != 0:
+            r, c = bombs[b, B_ROW], bombs[b, B_COL]
+            if fire[r, c] != 0:
                 bombs[b, B_LIFE] = 0
+                credit[b] |= fresh[r, c]
                 pending = True
     meta[M_BOMBS] = n_bombs
 
 
 @njit(cache=True)
-def _redraw(board, agents, bombs, flames, meta, fire, was_alive):
-    """§3.13: draw bombs, add and draw flames, then agents; an agent on Flames dies."""
+def _redraw(board, agents, bombs, flames, meta, fire, was_alive, burn, fresh, killers):
+    """§3.13: draw bombs, add and draw flames, then agents; an agent on Flames dies.
+
+    A cell set on fire now takes this step's credit in `burn` (older flames keep theirs), and an
+    agent that dies here records its cell's credit in `killers`."""
     size = board.shape[0]
     for b in range(meta[M_BOMBS]):
         board[bombs[b, B_ROW], bombs[b, B_COL]] = BOMB
@@ -405,6 +428,7 @@ def _redraw(board, agents, bombs, flames, meta, fire, was_alive):
                 flames[n_flames, F_COL] = c
                 flames[n_flames, F_LIFE] = FLAME_LIFE_AT_CREATION
                 n_flames += 1
+                burn[r, c] = fresh[r, c]
     meta[M_FLAMES] = n_flames
     for i in range(n_flames):
         board[flames[i, F_ROW], flames[i, F_COL]] = FLAMES
@@ -414,6 +438,7 @@ def _redraw(board, agents, bombs, flames, meta, fire, was_alive):
         r, c = agents[a, A_ROW], agents[a, A_COL]
         if board[r, c] == FLAMES:
             agents[a, A_ALIVE] = 0
+            killers[a] = burn[r, c]
         else:
             board[r, c] = AGENT0 + a
 
@@ -461,10 +486,13 @@ def _score(agents, meta, game_type, max_steps, rewards):
 
 @njit(cache=True)
 def step_game(board, agents, bombs, flames, items, meta, actions, rewards, game_type, max_steps,
-              blast_cap):
+              blast_cap, burn, killers):
     """Advance one game by one step in place; fill `rewards` (4,) and return the result code.
 
-    Dead agents' actions are ignored. The caller validates actions and never steps a done game.
+    `burn` (S, S) and `killers` (4,) are the kill credit kept beside the state (uint8 bit masks of
+    agents, `game/kills.py`): the credit of the fire on each cell, and of the fire each dead agent
+    died in. They never feed back into the game. Dead agents' actions are ignored. The caller
+    validates actions and never steps a done game.
     """
     size = board.shape[0]
     was_alive = agents[:, A_ALIVE] != 0
@@ -490,8 +518,9 @@ def step_game(board, agents, bombs, flames, items, meta, actions, rewards, game_
         _second_settle(agents, bombs, n_bombs, want, bwant, ao, bo, kicker_of, kicked_by)
     _commit_moves(board, agents, bombs, n_bombs, actions, want, bwant, kicked_by, blast_cap)
     fire = np.zeros((size, size), np.uint8)
-    _explode(board, agents, bombs, meta, fire)
-    _redraw(board, agents, bombs, flames, meta, fire, was_alive)
+    fresh = np.zeros((size, size), np.uint8)
+    _explode(board, agents, bombs, meta, fire, burn, fresh)
+    _redraw(board, agents, bombs, flames, meta, fire, was_alive, burn, fresh, killers)
     meta[M_STEP] += 1
     result = _score(agents, meta, game_type, max_steps, rewards)
     meta[M_DONE] = result != RESULT_INCOMPLETE

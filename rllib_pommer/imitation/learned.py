@@ -9,7 +9,7 @@ Both kinds of learned policy are played here: "learned" (a state_dict file) and,
 `rl/checkpoint_policy.py`, "rllib_checkpoint" (a PPO run's learner). Each kind registers the key
 naming its path and the loader of its network (`register_learned_kind`); the path is resolved
 against the policy file (`PolicySpec.file`), and one network is loaded per (kind, path, greedy)
-in a process, whichever kind.
+(and the file's other keys, such as a checkpoint's `module`) in a process, whichever kind.
 
 Many agents of one policy can share one forward pass: `prefetch` computes the actions of a batch
 of agents from their observations and parks each one on its agent, whose next `act` returns it.
@@ -19,9 +19,10 @@ The arena uses this to batch inference across the games a worker plays in lockst
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from functools import cache
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import torch
@@ -107,16 +108,23 @@ class LearnedAgent:
         return action
 
 
-Loader = Callable[[Path], tuple[PommerNet, Path]]  # a policy's path -> its net, the file read
+# A policy's path and its file's other keys (but `greedy`) -> its network and the file it read.
+Loader = Callable[[Path, Mapping[str, Any]], tuple[PommerNet, Path]]
 LOADERS: dict[str, tuple[str, Loader]] = {}  # kind -> (the key naming its path, its loader)
 
 
 def register_learned_kind(kind: str, key: str, load: Loader) -> None:
     """Make policy files of `kind` playable as learned agents: `key` names the path (relative to
-    the file) that `load` reads a network from."""
+    the file) that `load` reads a network from, given the file's other keys."""
     LOADERS[kind] = (key, load)
-    register_kind(kind, lambda spec: LearnedAgent(
-        _shared_policy(kind, spec.file(key), bool(spec.params.get("greedy", False)))))
+    register_kind(kind, lambda spec: LearnedAgent(_shared_policy(
+        kind, spec.file(key), bool(spec.params.get("greedy", False)), _options(spec, key))))
+
+
+def _options(spec: PolicySpec, key: str) -> tuple[tuple[str, Any], ...]:
+    """The policy file's keys that choose its network besides its path (e.g. a checkpoint's
+    `module`), hashable."""
+    return tuple(sorted((k, v) for k, v in spec.params.items() if k not in (key, "greedy")))
 
 
 def load_learned(spec: PolicySpec) -> tuple[PommerNet, Path]:
@@ -127,16 +135,17 @@ def load_learned(spec: PolicySpec) -> tuple[PommerNet, Path]:
         raise ValueError(f"policy {spec.name!r} (kind {spec.kind!r}) is not a learned policy; "
                          f"learned kinds: {sorted(LOADERS)}")
     key, load = LOADERS[spec.kind]
-    return load(spec.file(key))
+    return load(spec.file(key), dict(_options(spec, key)))
 
 
 @cache
-def _shared_policy(kind: str, path: Path, greedy: bool) -> LearnedPolicy:
-    net, source = LOADERS[kind][1](path)
+def _shared_policy(kind: str, path: Path, greedy: bool,
+                   options: tuple[tuple[str, Any], ...]) -> LearnedPolicy:
+    net, source = LOADERS[kind][1](path, dict(options))
     return LearnedPolicy(net, greedy, source)
 
 
-def _load_weights(path: Path) -> tuple[PommerNet, Path]:
+def _load_weights(path: Path, options: Mapping[str, Any]) -> tuple[PommerNet, Path]:
     return load_policy_net(path), path
 
 

@@ -18,13 +18,22 @@ the iteration sampled and trained in (`iteration_stage_name`, and its reward mod
 `iteration_reward`, which says whether the logged returns are shaped or raw); they differ on the
 iteration that ends a stage.
 
+In a stage marked `self_play`, the league's filled snapshot slots join the stage's opponents, and
+after each iteration the learner's league games (`league_games`, `league_wins`: sums over the
+iteration) go into the gate, which may fill the next slot from the learner's pi (rl/league.py);
+the new member's weights go to every env runner and the mapping takes it in at once. The result's
+`league` entry says how many snapshots play and where the gate's block stands.
+
 The iteration that ends a stage asks Tune for a checkpoint (`should_checkpoint`) and names the
 stage (`curriculum/ended_stage`), so the state at every stage's end is saved (training.py keeps
 it apart from Tune's rotation).
 
 Per episode the learner's true outcome (win/loss/tie of its team; in a league stage, also per
-opponent: `learner_win_vs_<policy>`), its return under the stage's reward mode and the share of
-its actions the filters overrode are logged; they appear under `env_runners/` in the results.
+opponent: `learner_win_vs_<policy>`), its return under the stage's reward mode, who killed whom
+(`learner_kills`: enemies its team killed; `learner_suicides` and `opponent_suicides`: agents of
+each team dead in their own blast; `game/kills.py`), the bombs each learner agent laid and the
+share of its actions the filters overrode are logged; they appear under `env_runners/` in the
+results.
 """
 
 from __future__ import annotations
@@ -33,42 +42,77 @@ from ray.rllib.callbacks.callbacks import RLlibCallback
 from ray.rllib.utils.metrics import ENV_RUNNER_RESULTS, NUM_EPISODES, NUM_EPISODES_LIFETIME
 from ray.tune.result import SHOULD_CHECKPOINT
 
+from ..game.constants import Action
+from ..game.kills import deaths_by_cause, kills_of_team
 from .connectors import FILTERS_KEY
 from .curriculum import Curriculum
+from .league import gate_step, members, next_slot, read_book
 from .mapping import SeatMapping
 from .rl_module import LEARNER
 
 
 def _push_stage(env_runner, mapping: SeatMapping, env_settings: dict) -> None:
     mapping_fn = env_runner.config.policy_mapping_fn
-    if getattr(mapping_fn, "stage", None) != mapping.stage:
+    if (getattr(mapping_fn, "stage", None), getattr(mapping_fn, "opponent", None)) != (
+            mapping.stage, mapping.opponent):
         env_runner.config.multi_agent(policy_mapping_fn=mapping)
     if env_runner.env is not None:  # the driver's runner has no env when remote runners exist
         for env in env_runner.env.unwrapped.envs:
             env.unwrapped.set_stage(**env_settings)
 
 
-def _learner_outcome(chunks) -> tuple[str, float, str] | None:
-    """("win"|"loss"|"tie" of the learner's team, the learner's return, the opponents' module)
-    from an episode's chunks, or None. The return is per learner agent, averaged where the
-    learner is its own teammate.
+def _on_learner(algorithm, func):
+    """`func(learner)`'s value on the (first) learner, which holds the module states that
+    checkpoints save."""
+    return next(iter(algorithm.learner_group.foreach_learner(func))).get()
+
+
+def _push_snapshots(algorithm, slots) -> None:
+    """The learner's copies of snapshot `slots` onto every env runner. Not RLlib's weight sync,
+    which an env runner skips when the learner's weights sequence number has not moved since
+    the last sync (a slot filled after an update has the same number)."""
+    for slot in slots:
+        state = _on_learner(algorithm, lambda learner, slot=slot: learner.module[slot].get_state())
+        algorithm.env_runner_group.foreach_env_runner(
+            lambda runner, slot=slot, state=state: runner.module[slot].set_state(state),
+            local_env_runner=True)
+
+
+def _learner_outcome(chunks) -> dict | None:
+    """The learner's episode from its chunks, or None: `result` ("win"|"loss"|"tie" of its
+    team), `return` (per learner agent, averaged where the learner is its own teammate),
+    `opponent` (the opponents' module), and per game `kills`, `suicides`, `opponent_suicides`
+    and `bombs` (per learner agent).
 
     An agent that died in an earlier chunk is absent from the later ones, so all are searched."""
     returns: dict = {}
+    bombs: dict = {}
     modules: dict = {}
     for chunk in chunks:
         for agent in chunk.agent_episodes.values():
             modules[agent.agent_id] = agent.module_id
             if agent.module_id == LEARNER:
                 returns[agent.agent_id] = returns.get(agent.agent_id, 0.0) + agent.get_return()
+                bombs[agent.agent_id] = bombs.get(agent.agent_id, 0) + sum(
+                    int(a) == Action.BOMB for a in agent.get_actions())
     finals = [e.get_infos(-1) for e in chunks[-1].agent_episodes.values()]
-    winners = next((info["winners"] for info in finals if "winners" in info), None)
-    if not returns or winners is None:
+    final = next((info for info in finals if "winners" in info), None)
+    if not returns or final is None:
         return None
-    seat = next(iter(returns))
-    result = "tie" if not winners else "win" if seat in winners else "loss"
-    opponent = next(module for agent, module in modules.items() if agent % 2 != seat % 2)
-    return result, sum(returns.values()) / len(returns), opponent
+    seat, winners = next(iter(returns)), final["winners"]
+    outcome = {
+        "result": "tie" if not winners else "win" if seat in winners else "loss",
+        "return": sum(returns.values()) / len(returns),
+        "opponent": next(module for agent, module in modules.items() if agent % 2 != seat % 2),
+        "bombs": sum(bombs.values()) / len(bombs),
+    }
+    if "killers" in final:
+        died, killers = final["died"], final["killers"]
+        outcome["kills"] = kills_of_team(seat, died, killers)
+        outcome["suicides"] = deaths_by_cause((seat % 2, seat % 2 + 2), died, killers)["self"]
+        outcome["opponent_suicides"] = deaths_by_cause(
+            (1 - seat % 2, 3 - seat % 2), died, killers)["self"]
+    return outcome
 
 
 class CurriculumCallback(RLlibCallback):
@@ -78,10 +122,17 @@ class CurriculumCallback(RLlibCallback):
         super().__init__()
         self.curriculum = curriculum
 
+    def _book(self, algorithm) -> list:
+        league = self.curriculum.league
+        return _on_learner(algorithm, lambda learner: read_book(learner, league))
+
     def apply_stage(self, algorithm, episodes: int) -> int:
         index = self.curriculum.stage_at(episodes)
         stage = self.curriculum.stages[index]
-        mapping = SeatMapping(index, stage.teammate, stage.opponent)
+        opponent = stage.opponent
+        if stage.self_play:
+            opponent = (*stage.opponents, *members(self._book(algorithm)))
+        mapping = SeatMapping(index, stage.teammate, opponent)
         env_settings = {"reward": stage.reward, "action_filter": stage.action_filter,
                         "jitter": stage.jitter}
         algorithm.env_runner_group.foreach_env_runner(
@@ -103,6 +154,8 @@ class CurriculumCallback(RLlibCallback):
 
         def set_state_and_stage(state):
             set_state(state)
+            if self.curriculum.league:
+                _push_snapshots(algorithm, members(self._book(algorithm)))
             self.apply_stage(algorithm, self._lifetime_episodes(algorithm))
         algorithm.set_state = set_state_and_stage
 
@@ -110,11 +163,27 @@ class CurriculumCallback(RLlibCallback):
         if not is_evaluation:
             self.apply_stage(algorithm, self._lifetime_episodes(algorithm))
 
+    def _gate(self, algorithm, runners: dict, episodes: int) -> dict:
+        """The iteration's league games into the gate; a filled slot goes to the env runners."""
+        league = self.curriculum.league
+        wins, games = int(runners.get("league_wins", 0)), int(runners.get("league_games", 0))
+        filled = _on_learner(
+            algorithm, lambda learner: gate_step(learner, league, wins, games, episodes))
+        if filled:
+            _push_snapshots(algorithm, [filled])
+        book = self._book(algorithm)
+        block = next_slot(book)
+        return {"snapshots": len(members(book)), "filled": filled, "gate_games": block.games,
+                "gate_win_rate": block.wins / block.games if block.games else float("nan"),
+                "members": list(members(book))}
+
     def on_train_result(self, *, algorithm, result, **kwargs) -> None:
         episodes = int(result[ENV_RUNNER_RESULTS].get(NUM_EPISODES_LIFETIME, 0))
-        index = self.apply_stage(algorithm, episodes)
         before = self.curriculum.stage_at(episodes - int(result[ENV_RUNNER_RESULTS].get(
             NUM_EPISODES, 0)))
+        if self.curriculum.stages[before].self_play:
+            result["league"] = self._gate(algorithm, result[ENV_RUNNER_RESULTS], episodes)
+        index = self.apply_stage(algorithm, episodes)
         finished = episodes >= self.curriculum.total_episodes  # the run stops after this one
         ended = self.curriculum.stages[before].name if before != index or finished else None
         if ended:
@@ -136,7 +205,7 @@ class CurriculumCallback(RLlibCallback):
         outcome = _learner_outcome([*(prev_episode_chunks or []), episode])
         if outcome is None or metrics_logger is None:
             return
-        result, learner_return, opponent = outcome
+        result, opponent = outcome["result"], outcome["opponent"]
         mapping = env_runner.config.policy_mapping_fn if env_runner is not None else None
         league = isinstance(getattr(mapping, "opponent", None), tuple)
         for name in ("win", "loss", "tie"):
@@ -144,7 +213,17 @@ class CurriculumCallback(RLlibCallback):
             if league:  # and against each opponent of the league
                 metrics_logger.log_value(f"learner_{name}_vs_{opponent}", float(result == name),
                                          window=100)
-        metrics_logger.log_value("learner_return", learner_return, window=100)
+        if league:  # the self-play gate's count, summed over the iteration
+            metrics_logger.log_value("league_games", 1, reduce="sum")
+            metrics_logger.log_value("league_wins", int(result == "win"), reduce="sum")
+        metrics_logger.log_value("learner_return", outcome["return"], window=100)
+        metrics_logger.log_value("learner_bombs", outcome["bombs"], window=100)
+        for key in ("kills", "suicides", "opponent_suicides"):
+            if key in outcome:
+                metrics_logger.log_value(f"learner_{key}", float(outcome[key]), window=100)
+                if league and key == "kills":
+                    metrics_logger.log_value(f"learner_kills_vs_{opponent}",
+                                             float(outcome[key]), window=100)
         filters = list(episode.custom_data.get(FILTERS_KEY, {}).values())
         steps = sum(f.steps for f in filters)
         if steps:

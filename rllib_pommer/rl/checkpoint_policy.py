@@ -1,9 +1,11 @@
 """Policy kind "rllib_checkpoint": the learner module of a PPO run, played like any learned policy.
 
 A policy file (`kind = "rllib_checkpoint"`, `checkpoint = "<path>"` relative to the file, optional
-`greedy`) or a bare directory given as a policy name (see `registry.resolve_policy`) names a
-checkpoint folder, a Tune trial folder (its latest `checkpoint_*` is used) or a run folder holding
-one or more trials (the newest checkpoint among them). The learner's pi weights are read straight
+`greedy`, optional `module`) or a bare directory given as a policy name (see
+`registry.resolve_policy`; `DIR@snapshot_2` names a self-play snapshot's module, rl/league.py)
+names a checkpoint folder, a Tune trial folder (its latest `checkpoint_*` is used) or a run folder
+holding one or more trials (the newest checkpoint among them). The module played is the learner's
+unless `module` names another module of the checkpoint. The learner's pi weights are read straight
 from the module's saved state, without rebuilding the RLlib module (which would want the imitation
 weights it started from), into a `PommerNet`, and played as the "learned" kind is
 (`learned.register_learned_kind`: the same path resolution, cache and agents).
@@ -25,7 +27,9 @@ import pickletools
 import re
 import subprocess
 import typing
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 import torch
 
@@ -44,7 +48,8 @@ from .history import (
     write_summary,
 )
 
-MODULE_STATE = Path("learner_group/learner/rl_module/learner/module_state.pkl")
+MODULES_DIR = Path("learner_group/learner/rl_module")
+MODULE_STATE = MODULES_DIR / "learner" / "module_state.pkl"
 ALGORITHM_STATE = "algorithm_state.pkl"
 # How params.json records the CurriculumCallback partial of rl/config.py (its repr).
 CURRICULUM_IN_PARAMS = re.compile(r"Curriculum\(name='([^']+)'")
@@ -122,12 +127,16 @@ def _load_state(stream: typing.BinaryIO, name: object) -> dict:
     return state
 
 
-def load_checkpoint_net(path: str | Path, part: str = "pi") -> PommerNet:
+def load_checkpoint_net(path: str | Path, part: str = "pi", module: str = "learner") -> PommerNet:
     """The learner's policy network (`part="pi"`) or value network (`"vf"`), eval mode, from a
-    checkpoint, trial or run folder."""
+    checkpoint, trial or run folder; `module` names another module's (a self-play snapshot)."""
     if part not in NET_OUTPUTS:
         raise ValueError(f"part must be one of {list(NET_OUTPUTS)}, got {part!r}")
-    state_file = latest_checkpoint(path) / MODULE_STATE
+    checkpoint = latest_checkpoint(path)
+    state_file = checkpoint / MODULES_DIR / module / "module_state.pkl"
+    if not state_file.is_file():
+        found = sorted(p.parent.name for p in (checkpoint / MODULES_DIR).glob("*/module_state.pkl"))
+        raise ValueError(f"{checkpoint}: no module {module!r}; its modules: {found}")
     state = read_module_state(state_file)
     weights = {str(key).removeprefix(f"{part}."): torch.as_tensor(value)
                for key, value in state.items() if str(key).startswith(f"{part}.")}
@@ -331,8 +340,12 @@ def export_policy(source: str | Path, target: str | Path) -> tuple[Path, Path]:
     return weights, policy_file
 
 
-def _load_checkpoint(path: Path) -> tuple[PommerNet, Path]:
-    return load_checkpoint_net(path), latest_checkpoint(path) / MODULE_STATE
+def _load_checkpoint(path: Path, options: Mapping[str, Any]) -> tuple[PommerNet, Path]:
+    """The network of the checkpoint's module `options["module"]` (default the learner's) and
+    the module state it was read from."""
+    module = options.get("module", "learner")
+    return (load_checkpoint_net(path, module=module),
+            latest_checkpoint(path) / MODULES_DIR / module / "module_state.pkl")
 
 
 register_learned_kind("rllib_checkpoint", "checkpoint", _load_checkpoint)

@@ -55,6 +55,7 @@ from .connectors import LearnerFilters
 from .curriculum import Curriculum
 from .env import ENV_NAME
 from .fixed_modules import fixed_module_spec
+from .league import snapshot_specs
 from .learner import DUAL_CLIP_KEY, PommerPPOLearner
 from .mapping import SeatMapping
 from .rl_module import LEARNER, PommerPPOModule
@@ -111,6 +112,8 @@ def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None
             vf_weights, part="vf"))
     modules = {LEARNER: RLModuleSpec(module_class=PommerPPOModule, model_config=model_config)}
     modules |= {name: fixed_module_spec(name) for name in curriculum.policies()}
+    if curriculum.league:  # built empty; the callback's gate fills them (league.py)
+        modules |= snapshot_specs(curriculum.league)
     return (
         PPOConfig()
         .environment(env, env_config={

@@ -1,4 +1,5 @@
-"""The learner's action filter and jitter correction as a module-to-env connector piece.
+"""The action filter and jitter correction as a module-to-env connector piece: the learner's, and
+those a fixed opponent's name asks for (`simple_action` is SimpleAgent behind the action filter).
 
 The paper post-processes the policy's actions: the Action Filter (vetoes moves into flames) in some
 episodes and the Jitter Correction (SimpleAgent takes over when the agent loops) in others. Doing
@@ -14,6 +15,10 @@ registry) around a stand-in that returns the module's action. Their memory (posi
 expert SimpleAgent's memory, random streams) therefore lives with the episode, seeded from the
 episode's first observation. Counts of learner steps and overridden actions go to custom_data for
 the episode-end metrics.
+
+A fixed module named with the registry's filter suffixes (`_jitter`, `_action`, `_jitter_action`)
+has its filters on in every episode; they are kept apart (FIXED_FILTERS_KEY), so the learner's
+counts stay the learner's.
 """
 
 from __future__ import annotations
@@ -25,11 +30,27 @@ from ray.rllib.core.columns import Columns
 
 from ..agents.action_filter import ActionFilter
 from ..agents.jitter import JitterCorrection
+from ..agents.registry import resolve_policy
 from ..game.constants import TEAM_PRESET
 from ..game.raw_codec import unpack_raw
 from .names import LEARNER
 
 FILTERS_KEY = "learner_filters"
+FIXED_FILTERS_KEY = "fixed_filters"
+
+
+# The registry's filter names -> the episode flags EpisodeFilters reads (the env's `filters` info).
+FLAG_OF_FILTER = {"jitter": "jitter", "action": "action_filter"}
+
+
+def fixed_filter_flags(module_id: str) -> dict[str, bool]:
+    """The filters always on for a fixed module: those its policy name's suffix asks for (none
+    for a module id that is no policy name, as self-play snapshots)."""
+    try:
+        filters = resolve_policy(module_id).filters
+    except ValueError:
+        return {}
+    return {FLAG_OF_FILTER[name]: True for name in filters}
 
 
 class ModuleAction:
@@ -71,25 +92,36 @@ class EpisodeFilters:
 
 class LearnerFilters(ConnectorV2):
     """Module-to-env piece: the learner's action through its episode's jitter correction and
-    action filter (when on), with ACTION_LOGP recomputed for the executed action."""
+    action filter (when on), with ACTION_LOGP recomputed for the executed action; a fixed
+    module's through the filters its name asks for."""
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._fixed_flags: dict[str, dict[str, bool]] = {}
+
     def __call__(self, *, rl_module, batch, episodes, explore=None, shared_data=None,
                  metrics=None, **kwargs):
         by_id = {episode.id_: episode for episode in episodes}
         for key, actions in batch[Columns.ACTIONS].items():
             episode_id, agent_id, module_id = key
             if module_id != LEARNER:
-                continue
+                if module_id not in self._fixed_flags:
+                    self._fixed_flags[module_id] = fixed_filter_flags(module_id)
+                if not self._fixed_flags[module_id]:
+                    continue
             episode = by_id[episode_id]
             agent_episode = episode.agent_episodes[agent_id]
             raw = agent_episode.get_observations(-1)["raw"]
-            by_agent = episode.custom_data.setdefault(FILTERS_KEY, {})
+            store = FILTERS_KEY if module_id == LEARNER else FIXED_FILTERS_KEY
+            by_agent = episode.custom_data.setdefault(store, {})
             filters = by_agent.get(agent_id)
             if filters is None:
-                flags = agent_episode.get_infos(-1).get("filters", {})
+                flags = (agent_episode.get_infos(-1).get("filters", {}) if module_id == LEARNER
+                         else self._fixed_flags[module_id])
                 filters = by_agent[agent_id] = EpisodeFilters(flags, agent_id, raw)
             chosen = int(actions[0])
             executed = filters.act(chosen, raw)
-            if executed == chosen:
+            if executed == chosen or module_id != LEARNER:
+                actions[0] = executed
                 continue
             actions[0] = executed
             if Columns.ACTION_LOGP in batch:  # by the module's own distribution, as PPO's

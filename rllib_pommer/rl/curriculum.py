@@ -21,7 +21,11 @@ A stage lasts `episodes` lifetime episodes (counted over all env runners). Polic
 learned / RLlib-checkpoint policies); a teammate may also be `"learner"`, the trained policy
 itself, so both seats of its team learn as one policy (the paper's recipe keeps a SuicideTeammate
 beside a lone learner), and an opponent a list of policies, a league that takes turns by
-episodes (`opponent = ["simple", "static", "ppo_cautious"]`; rl/mapping.py says how). Every error
+episodes (`opponent = ["simple", "static", "ppo_cautious"]`; rl/mapping.py says how), and
+names may carry the registry's filter suffixes (`simple_action`: SimpleAgent behind the action
+filter). A `[league]` table (`slots`, `gate_games`, `gate_win`) adds frozen self-play snapshots of
+the learner, which join the league of every stage marked `self_play = true` (rl/league.py). Every
+error
 names the file, the key and the valid choices, so a typo fails before Ray starts: this module
 imports neither Ray nor torch (tests/test_layering.py checks a whole load in a fresh interpreter).
 """
@@ -39,15 +43,15 @@ from ..game.constants import TEAM_PRESET
 from ..game.rewards import REWARD_MODES
 from ..util.shipped import data_dir
 from .names import LEARNER
-from .settings import PPOSettings
+from .settings import LeagueSettings, PPOSettings
 
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover
     import tomli as tomllib
 
-TOP_KEYS = ("name", "description", "pi_weights", "vf_weights", "max_steps", "ppo", "defaults",
-            "stage")
+TOP_KEYS = ("name", "description", "pi_weights", "vf_weights", "max_steps", "ppo", "league",
+            "defaults", "stage")
 
 
 @dataclass(frozen=True)
@@ -63,6 +67,7 @@ class Stage:
     action_filter: float = 0.3
     jitter: float = 0.1
     freeze_pi: bool = False
+    self_play: bool = False  # the league's filled snapshot slots join this stage's opponents
 
     @property
     def opponents(self) -> tuple[str, ...]:
@@ -81,6 +86,7 @@ class Curriculum:
     pi_weights: Path
     max_steps: int
     ppo: PPOSettings
+    league: LeagueSettings | None = None  # self-play snapshot slots and their gate
 
     @property
     def description(self) -> str:
@@ -160,10 +166,10 @@ def _check_type(where: str, key: str, value: Any, kind: type, positive: bool = F
         raise ValueError(f"{where}: {key} must be {wanted}, got {value!r}")
 
 
-def _check_ppo(where: str, ppo: dict) -> None:
-    options = PPOSettings.options()
-    _check_keys(where, ppo, options)
-    for key, value in ppo.items():
+def _check_options(where: str, table: dict, options: dict) -> None:
+    """A table of bounded options (`PPOSettings.options()`, `LeagueSettings.options()`)."""
+    _check_keys(where, table, options)
+    for key, value in table.items():
         kind, low, high = options[key]
         _check_type(where, key, value, kind, positive=kind is int)
         if (low is not None and not value > low) or (high is not None and not value <= high):
@@ -176,11 +182,10 @@ def _check_policy(where: str, name: Any) -> None:
         spec = resolve_policy(name)
     except ValueError:
         raise ValueError(f"{where}: unknown policy {name!r}; valid: {policy_names()}") from None
-    if spec.filters or KINDS[spec.kind].fixed is None:
+    if KINDS[spec.kind].fixed is None:
         fixed = [kind for kind, entry in KINDS.items() if entry.fixed]
-        raise ValueError(f"{where}: policy {name!r} cannot be a fixed module (kind {spec.kind!r}, "
-                         f"filters {list(spec.filters)}); valid: {policy_names()} without "
-                         f"filter suffixes, of kinds {fixed}")
+        raise ValueError(f"{where}: policy {name!r} cannot be a fixed module (kind {spec.kind!r});"
+                         f" valid: {policy_names()} (with filter suffixes too), of kinds {fixed}")
 
 
 def _opponent(where: str, value: Any) -> str | tuple[str, ...]:
@@ -234,7 +239,10 @@ def load_curriculum(name_or_path: str | Path) -> Curriculum:
     if "max_steps" in data:
         _check_type(where, "max_steps", data["max_steps"], int, positive=True)
     ppo = data.get("ppo", {})
-    _check_ppo(f"{where} [ppo]", ppo)
+    _check_options(f"{where} [ppo]", ppo, PPOSettings.options())
+    league = data.get("league")
+    if league is not None:
+        _check_options(f"{where} [league]", league, LeagueSettings.options())
     defaults = data.get("defaults", {})
     _check_keys(f"{where} [defaults]", defaults, set(STAGE_KEYS) - {"name", "episodes"})
     tables = data.get("stage", [])
@@ -242,6 +250,10 @@ def load_curriculum(name_or_path: str | Path) -> Curriculum:
         raise ValueError(f"{where}: no [[stage]] tables")
     stages = tuple(_stage(f"{where} stage {i + 1}", {**defaults, **table})
                    for i, table in enumerate(tables))
+    for i, stage in enumerate(stages):
+        if stage.self_play and league is None:
+            raise ValueError(f"{where} stage {i + 1}: self_play needs a [league] table "
+                             f"(slots, gate_games, gate_win)")
     return Curriculum(
         name=data.get("name", path.stem),
         path=path,
@@ -250,4 +262,5 @@ def load_curriculum(name_or_path: str | Path) -> Curriculum:
                     else policies_dir() / "imitation" / "pi.pt").resolve(),
         max_steps=data.get("max_steps", TEAM_PRESET.max_steps),
         ppo=PPOSettings.from_options(ppo),
+        league=None if league is None else LeagueSettings.from_options(league),
     )

@@ -72,6 +72,8 @@ SUMMARY_COLUMNS = (
     "training_iteration", "time_total_s", "env_runners/num_env_steps_sampled_lifetime",
     "curriculum/pi_frozen", "env_runners/learner_win", "env_runners/learner_loss",
     "env_runners/learner_tie", "env_runners/learner_override_share",
+    "env_runners/learner_kills", "env_runners/learner_suicides",
+    "env_runners/learner_opponent_suicides", "env_runners/learner_bombs",
     "env_runners/episode_len_mean", "learners/learner/vf_explained_var",
     "learners/learner/pi_logit_spread", "learners/learner/nonfinite_updates_skipped",
     "learners/learner/pi_log_ratio_max", "learners/learner/pi_log_ratio_min",

@@ -7,7 +7,8 @@ checked against them without Ray, and `bench learn` hands the plain-torch baseli
 
 `PPOSettings` are the values `rl/config.build_config` hands RLlib; a curriculum's `[ppo]` table may
 override the fields marked as options (our choices, argued in rl/config.py), never the paper's
-(entropy 0, clip 0.01, minibatch 128). `RunSettings` are one `train` command's.
+(entropy 0, clip 0.01, minibatch 128). `LeagueSettings` are a curriculum's `[league]` table, the
+self-play snapshots (rl/league.py). `RunSettings` are one `train` command's.
 """
 
 from __future__ import annotations
@@ -25,8 +26,26 @@ def _option(default, low=None, high=None, key: str | None = None):
     return field(default=default, metadata={"option": key, "range": (low, high)})
 
 
+class TableSettings:
+    """Settings a curriculum's table may set, field by field (`_option` fields)."""
+
+    @classmethod
+    def options(cls) -> dict[str, tuple[type, float | None, float | None]]:
+        """{key in the table: (type, low, high)} of every overridable field."""
+        hints = typing.get_type_hints(cls)
+        return {f.metadata["option"] or f.name: (hints[f.name], *f.metadata["range"])
+                for f in dataclasses.fields(cls) if "option" in f.metadata}
+
+    @classmethod
+    def from_options(cls, table: typing.Mapping[str, typing.Any]):
+        """The defaults with a table's (already checked) values in place."""
+        names = {f.metadata["option"] or f.name: f.name
+                 for f in dataclasses.fields(cls) if "option" in f.metadata}
+        return cls(**{names[key]: value for key, value in table.items()})
+
+
 @dataclass(frozen=True)
-class PPOSettings:
+class PPOSettings(TableSettings):
     """Every PPO setting of a run; the defaults are the ones campaign runs were started with."""
 
     # Options of a curriculum's [ppo] table.
@@ -48,19 +67,17 @@ class PPOSettings:
     use_kl_loss: bool = False
     grad_clip: float = 10.0
 
-    @classmethod
-    def options(cls) -> dict[str, tuple[type, float | None, float | None]]:
-        """{key in a [ppo] table: (type, low, high)} of every overridable field."""
-        hints = typing.get_type_hints(cls)
-        return {f.metadata["option"] or f.name: (hints[f.name], *f.metadata["range"])
-                for f in dataclasses.fields(cls) if "option" in f.metadata}
 
-    @classmethod
-    def from_options(cls, table: typing.Mapping[str, typing.Any]) -> PPOSettings:
-        """The defaults with a [ppo] table's (already checked) values in place."""
-        names = {f.metadata["option"] or f.name: f.name
-                 for f in dataclasses.fields(cls) if "option" in f.metadata}
-        return cls(**{names[key]: value for key, value in table.items()})
+@dataclass(frozen=True)
+class LeagueSettings(TableSettings):
+    """Self-play snapshot slots and the gate that fills them (rl/league.py)."""
+
+    slots: int = _option(4, high=16)  # frozen modules snapshot_0 .. snapshot_{slots - 1}
+    gate_games: int = _option(400)  # league games per block of the gate
+    gate_win: float = _option(0.7, low=0, high=1)  # a block's win rate that adds a snapshot
+
+    def slot_ids(self) -> list[str]:
+        return [f"snapshot_{i}" for i in range(self.slots)]
 
 
 @dataclass(frozen=True)

@@ -137,9 +137,19 @@ class Progress(FreshOnRestore):
               f"iter {result['training_iteration']}  episodes {episodes}/{total}  "
               f"W/L/T {runners.get('learner_win', 0):.2f}/{runners.get('learner_loss', 0):.2f}/"
               f"{runners.get('learner_tie', 0):.2f}  return {runners.get('learner_return', 0):+.2f}"
+              f"{_kills(runners)}"
               f"  {steps_per_s:.0f} env steps/s  ETA stage {_eta(stage_end - episodes, rate)}, "
               f"run {_eta(total - episodes, rate)} at this stage's pace{_skipped(result)}",
               flush=True)
+
+
+def _kills(runners: dict) -> str:
+    """Per game: enemies the learner's team killed, and each team's suicides, where logged."""
+    if "learner_kills" not in runners:
+        return ""
+    return (f"  kills {runners['learner_kills']:.2f} (suicides ours "
+            f"{runners.get('learner_suicides', 0):.2f}, theirs "
+            f"{runners.get('learner_opponent_suicides', 0):.2f})")
 
 
 def _skipped(result: dict) -> str:

@@ -20,11 +20,12 @@ from __future__ import annotations
 import csv
 import json
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..agents.registry import FILTER_SUFFIXES, FILTERS
 from ..arena.rates import wilson
+from ..arena.records import KILL_COUNTS, game_record
 
 VARIANTS = ("vanilla", "jitter", "action", "jitter_action")
 NAME_SEPARATOR = "__vs__"
@@ -41,11 +42,15 @@ class Match:
 
 @dataclass
 class Outcomes:
-    """Team A's results over `games` games."""
+    """Team A's results over `games` games, and who killed whom in the `credited` of them whose
+    records carry kill credit (sums of `GameRecord.kill_counts` and of A's bombs laid)."""
 
     win: int = 0
     loss: int = 0
     tie: int = 0
+    credited: int = 0
+    kill_sums: dict[str, int] = field(default_factory=lambda: dict.fromkeys(KILL_COUNTS, 0))
+    bombs_a: int = 0
 
     @property
     def games(self) -> int:
@@ -57,6 +62,26 @@ class Outcomes:
     def intervals(self) -> tuple[tuple[float, float], ...]:
         """95% Wilson intervals of the win, loss and tie rates, each within [0, 1]."""
         return tuple(wilson(k, self.games) for k in (self.win, self.loss, self.tie))
+
+    def per_game(self) -> dict[str, float] | None:
+        """Kill counts per game (KILL_COUNTS) and A's bombs per agent per game, or None when no
+        record carried kill credit."""
+        if not self.credited:
+            return None
+        out = {key: value / self.credited for key, value in self.kill_sums.items()}
+        out["bombs_per_agent_a"] = self.bombs_a / (2 * self.credited)
+        return out
+
+    def add(self, row: dict) -> None:
+        """Count one records row (at least ROW_KEYS; kill credit where it has `killers`)."""
+        setattr(self, row["result"], getattr(self, row["result"]) + 1)
+        if row.get("killers") not in (None, ""):
+            record = game_record(row)
+            counts = record.kill_counts()
+            self.credited += 1
+            for key, value in counts.items():
+                self.kill_sums[key] += value
+            self.bombs_a += sum(record.bombs_laid[s] for s in record.seats_a)
 
 
 def read_rows(path: Path) -> list[dict]:
@@ -127,7 +152,7 @@ def load_outcomes(paths: Iterable[Path]) -> dict[Match, Outcomes]:
         for row in rows:
             if row["result"] not in ("win", "loss", "tie"):
                 raise ValueError(f"{path}: result {row['result']!r} is not win, loss or tie")
-            setattr(outcomes, row["result"], getattr(outcomes, row["result"]) + 1)
+            outcomes.add(row)
     return results
 
 

@@ -9,6 +9,7 @@ import re
 from collections.abc import Iterator
 from pathlib import Path
 
+from ..arena.ladder import LADDER_FILE
 from ..game.records import read_games, read_jsonl
 from .behaviour import heatmaps_by_opponent
 from .endings import endings_table, load_endings
@@ -21,6 +22,7 @@ from .figures import (
     plot_training,
 )
 from .frames import load_game
+from .ladder import ladder_section
 from .matches import ROW_KEYS, load_outcomes, rates_by_opponent
 from .paper import paper_table
 from .render import render_game
@@ -33,10 +35,10 @@ SUMMARIES = "runs"  # below the report's folder: one small trial folder per run 
 
 
 def kind_of(path: Path) -> str:
-    """"runs" (a directory: Tune trials in or below it), "records" (arena rows) or "replays",
-    from what the path holds."""
+    """"ladder" (a ladder job's folder), "runs" (another directory: Tune trials in or below
+    it), "records" (arena rows) or "replays", from what the path holds."""
     if path.is_dir():
-        return "runs"
+        return "ladder" if (path / LADDER_FILE).is_file() else "runs"
     if path.suffix == ".csv":
         with open(path, newline="") as f:
             first = dict.fromkeys(next(csv.reader(f), []))
@@ -50,7 +52,7 @@ def kind_of(path: Path) -> str:
 
 
 def classify(paths: list[Path]) -> dict[str, list[Path]]:
-    found: dict[str, list[Path]] = {"runs": [], "records": [], "replays": []}
+    found: dict[str, list[Path]] = {"runs": [], "records": [], "replays": [], "ladder": []}
     for path in paths:
         found[kind_of(path)].append(path)
     return found
@@ -114,16 +116,17 @@ def _fig5_and_game(replays: list[Path], out: Path) -> Iterator[str]:
     yield "![the last step of a game](game.png)"
 
 
-def write_report(out: Path, training: Training | None, records: list[Path],
-                 replays: list[Path]) -> Path:
-    """Draw what the inputs allow and write `out`/report.md; `training`'s trials summarised in
-    `out`/`SUMMARIES` by the job."""
+def write_report(out: Path, found: dict[str, list[Path]], training: Training | None) -> Path:
+    """Draw what the inputs allow (`found`: the inputs by `classify`; `training`: the figures of
+    its runs, whose trials the job summarised in `out`/`SUMMARIES`) and write `out`/report.md."""
     out.mkdir(parents=True, exist_ok=True)
     parts = ["# Report: our runs in the paper's figures and tables"]
-    parts += list(tables_section(records, out)) if records else ["_No records among the inputs._"]
-    parts += (list(fig3_section(training, out, SUMMARIES)) if training
-              else ["_No trials among the inputs._"])
-    parts += list(_fig5_and_game(replays, out)) if replays else ["_No replays among the inputs._"]
+    sections = (("records", found["records"], tables_section),
+                ("ladder", found["ladder"], ladder_section),
+                ("trials", training, lambda given, out: fig3_section(given, out, SUMMARIES)),
+                ("replays", found["replays"], _fig5_and_game))
+    for kind, given, section in sections:
+        parts += list(section(given, out)) if given else [f"_No {kind} among the inputs._"]
     report = out / "report.md"
     report.write_text("\n\n".join(parts) + "\n")
     return report

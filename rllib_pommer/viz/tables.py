@@ -1,6 +1,7 @@
 """Win/loss/tie tables in the paper's layout (Tables 2 and 3): rows are opponents, columns the
-four variants, each cell win / loss / tie; ours over n games with their 95% Wilson intervals, the
-paper's (1000 games) below. And
+four variants, each cell win / loss / tie; ours over n games with their 95% Wilson intervals and,
+where the records carry kill credit, per game the opponents we killed, the opponents' suicides,
+ours, and our bombs per agent; the paper's (1000 games) below. And
 the training table: what each curriculum phase of each run cost and how the learner did."""
 
 from __future__ import annotations
@@ -20,6 +21,14 @@ def _intervals(intervals) -> str:
     return " / ".join(f"[{low:.3f}, {high:.3f}]" for low, high in intervals)
 
 
+def _kills(outcomes: Outcomes) -> str:
+    per_game = outcomes.per_game()
+    if per_game is None:
+        return ""
+    return (f"<br>kills {per_game['kills_a']:.2f}, their suicides {per_game['suicides_b']:.2f}, "
+            f"ours {per_game['suicides_a']:.2f}, bombs {per_game['bombs_per_agent_a']:.1f}")
+
+
 def results_table(team: str, results: dict[Match, Outcomes]) -> str:
     """The Markdown table of `team` (policy name without filters), beside the paper's if any."""
     ours = {(m.vs, m.variant): o for m, o in results.items() if m.team == team}
@@ -33,7 +42,7 @@ def results_table(team: str, results: dict[Match, Outcomes]) -> str:
         for variant in VARIANTS:
             mine = ours.get((vs, variant))
             text = (f"{_rates(mine.rates())} (n={mine.games})<br>{_intervals(mine.intervals())}"
-                    if mine else "—")
+                    f"{_kills(mine)}" if mine else "—")
             paper = paper_rows.get(vs, {}).get(variant)
             cells.append(text + (f"<br>paper {_rates(paper)}" if paper else ""))
         lines.append(f"| {PAPER_OPPONENTS.get(vs, vs)} (`{vs}`) | " + " | ".join(cells) + " |")

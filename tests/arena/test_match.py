@@ -9,10 +9,12 @@ import pytest
 
 from rllib_pommer.arena.match import MatchSpec, play_match
 from rllib_pommer.arena.rates import wilson
-from rllib_pommer.arena.records import summarise
+from rllib_pommer.arena.records import summarise, write_records
 from rllib_pommer.evaluate import main
 from rllib_pommer.game.records import read_games
 from rllib_pommer.replay import main as replay_main
+from rllib_pommer.viz.matches import load_outcomes
+from rllib_pommer.viz.tables import results_table
 
 
 def test_same_seed_same_records_whatever_the_workers():
@@ -54,7 +56,7 @@ def test_cli_prints_summary_and_writes_records(tmp_path, capsys):
     rows = [json.loads(line) for line in jsonl.read_text().splitlines()]
     assert [r["game"] for r in rows] == [0, 1, 2, 3]
     assert set(rows[0]) == {"game", "seed", "seats_a", "result", "length", "died",
-                            "own_bomb_deaths", "bombs_laid", "team", "vs", "filters"}
+                            "own_bomb_deaths", "bombs_laid", "team", "vs", "filters", "killers"}
     assert (rows[0]["team"], rows[0]["vs"], rows[0]["filters"]) == ("simple", "static", [])
     assert main([*args, "--records", str(table)]) == 0
     with open(table) as f:
@@ -116,3 +118,23 @@ def test_a_failed_write_after_the_match_still_prints_the_summary(tmp_path, capsy
     captured = capsys.readouterr()
     assert code == 2 and "writing its output failed" in captured.err
     assert "simple vs static: 2 games" in captured.out and "win " in captured.out
+
+
+def test_records_credit_every_death_to_a_cause_and_tables_show_kills(tmp_path):
+    records = play_match(MatchSpec("simple", "simple", 16, seed=5), workers=1)
+    for r in records:
+        counts = r.kill_counts()
+        dead_b = sum(r.died[s] for s in range(4) if s not in r.seats_a)
+        dead_a = sum(r.died[s] for s in r.seats_a)
+        # every death has exactly one cause: an enemy kill, a suicide or a team kill
+        assert counts["kills_a"] + counts["suicides_b"] + counts["team_kills_b"] == dead_b
+        assert counts["kills_b"] + counts["suicides_a"] + counts["team_kills_a"] == dead_a
+        # the reference's own-bomb deaths are suicides here
+        assert counts["suicides_a"] >= sum(r.own_bomb_deaths[s] for s in r.seats_a)
+    summary = summarise(records)
+    assert summary["kills_a_per_game"] + summary["kills_b_per_game"] > 0
+    write_records(tmp_path / "m.jsonl", records)
+    (outcomes,) = load_outcomes([tmp_path / "m.jsonl"]).values()
+    assert outcomes.per_game()["kills_a"] == summary["kills_a_per_game"]
+    assert f"kills {summary['kills_a_per_game']:.2f}" in results_table(
+        "simple", load_outcomes([tmp_path / "m.jsonl"]))

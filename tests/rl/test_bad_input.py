@@ -33,7 +33,7 @@ def _write(tmp_path, text):
     (STAGE.replace("episodes = 5", "episodes = -1"), ["episodes"]),
     (STAGE + 'reward = "dense"\n', ["reward", "shaped", "raw"]),
     ("[ppo]\nlearning_rate = 1\n" + STAGE, ["[ppo]", "learning_rate", "lr"]),
-    (STAGE.replace('"static"', '"simple_action"'), ["simple_action", "filter"]),
+    (STAGE.replace('"static"', '"simpel_action"'), ["unknown policy 'simpel_action'"]),
     (STAGE + "freeze_pi = \"no\"\n", ["freeze_pi must be true or false, got 'no'"]),
     (STAGE.replace('"static"', "5"), ["opponent must be a policy name or a list", "got 5"]),
     ("[ppo]\ntrain_batch_size = \"big\"\n" + STAGE,

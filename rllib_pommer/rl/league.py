@@ -1,0 +1,124 @@
+"""Self-play: frozen snapshots of the learner that join its league of opponents.
+
+A curriculum's `[league]` table declares `slots` frozen modules, `snapshot_0` ... `snapshot_{n-1}`
+(`SnapshotModule`: pi only, never trained), built with the algorithm like every other module. A
+gate fills them: in stages marked `self_play = true`, the learner's games against the league
+(its scripted opponents plus every filled snapshot) are counted in blocks of `gate_games`; a block
+won at a rate of at least `gate_win` copies the learner's pi into the next slot (the first empty
+one, else the oldest), which from then on plays in the league. Fixed slots, not RLlib's
+`Algorithm.add_module` (which RLlib's `self_play` example uses): the set of modules never changes,
+so every checkpoint restores into the algorithm the config builds, with no module to re-add
+before loading (a restore trap users of `add_module` met), and the weight sync needs no new module
+id.
+
+The league's whole state lives in the slots themselves, as buffers beside pi: `born`, the lifetime
+episode count at which the slot was filled (-1: empty), and `tally`, the wins and games of the
+gate's current block toward filling that slot. RLlib checkpoints every module's state, so the
+league's members, their weights and the gate survive `--resume`, `--pack` and a move to another
+clone without any file of its own; the callback keeps no state and reads the book from the
+learner's modules whenever it needs it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import torch
+from ray.rllib.core.columns import Columns
+from ray.rllib.core.rl_module.rl_module import RLModuleSpec
+from ray.rllib.core.rl_module.torch import TorchRLModule
+
+from ..imitation.network import PommerNet
+from .names import LEARNER
+from .settings import LeagueSettings
+
+
+@dataclass(frozen=True)
+class Slot:
+    """One slot's entry in the league's book."""
+    module_id: str
+    born: int  # lifetime episodes when filled; -1 while empty
+    wins: int  # the gate's block toward filling this slot
+    games: int
+
+    @property
+    def filled(self) -> bool:
+        return self.born >= 0
+
+
+class SnapshotModule(TorchRLModule):
+    """A frozen copy of the learner's pi, plus the league's book for its slot (module
+    docstring). It samples from pi's logits, as the learner does in training."""
+
+    def setup(self):
+        self.pi = PommerNet(6, dropout=0.0).to(memory_format=torch.channels_last)
+        self.pi.requires_grad_(False)
+        self.register_buffer("born", torch.tensor(-1, dtype=torch.int64))
+        self.register_buffer("tally", torch.zeros(2, dtype=torch.int64))
+
+    def _forward(self, batch, **kwargs):
+        planes = batch[Columns.OBS]["planes"].contiguous(memory_format=torch.channels_last)
+        return {Columns.ACTION_DIST_INPUTS: self.pi(planes)}
+
+    def slot(self, module_id: str) -> Slot:
+        return Slot(module_id, int(self.born), int(self.tally[0]), int(self.tally[1]))
+
+    def count(self, wins: int, games: int) -> None:
+        self.tally += torch.tensor([wins, games], dtype=torch.int64)
+
+    def fill(self, pi: torch.nn.Module, episodes: int) -> None:
+        """Copy `pi`'s weights in and open the slot at `episodes`; its block starts again."""
+        with torch.no_grad():
+            for mine, theirs in zip(self.pi.state_dict().values(), pi.state_dict().values(),
+                                    strict=True):
+                mine.copy_(theirs)
+        self.born.fill_(episodes)
+        self.tally.zero_()
+
+
+def snapshot_specs(settings: LeagueSettings) -> dict[str, RLModuleSpec]:
+    return {slot: RLModuleSpec(module_class=SnapshotModule) for slot in settings.slot_ids()}
+
+
+def read_book(learner, settings: LeagueSettings) -> list[Slot]:
+    """The slots as the learner's modules hold them (run on a learner)."""
+    return [learner.module[slot].slot(slot) for slot in settings.slot_ids()]
+
+
+def next_slot(book: list[Slot]) -> Slot:
+    """The slot the gate fills next: the first empty one, else the one filled longest ago."""
+    empty = [slot for slot in book if not slot.filled]
+    return empty[0] if empty else min(book, key=lambda slot: slot.born)
+
+
+def members(book: list[Slot]) -> tuple[str, ...]:
+    """The filled slots, in slot order (the league's snapshot members)."""
+    return tuple(slot.module_id for slot in book if slot.filled)
+
+
+def gate_step(learner, settings: LeagueSettings, wins: int, games: int,
+              episodes: int) -> str | None:
+    """Count `wins` of `games` league games into the next slot's block (run on a learner);
+    when the block is complete, fill that slot from the learner's pi if the block's win rate
+    passes the gate, else start a new block. Returns the filled slot's id, or None."""
+    if games <= 0:
+        return None
+    slot = next_slot(read_book(learner, settings))
+    module = learner.module[slot.module_id]
+    module.count(wins, games)
+    slot = module.slot(slot.module_id)
+    if slot.games < settings.gate_games:
+        return None
+    if slot.wins / slot.games >= settings.gate_win:
+        module.fill(learner.module[LEARNER].pi, episodes)
+        return slot.module_id
+    module.tally.zero_()
+    return None
+
+
+def describe(book: list[Slot], settings: LeagueSettings) -> str:
+    """One line for the progress output: members and the gate's block."""
+    slot = next_slot(book)
+    rate = slot.wins / slot.games if slot.games else float("nan")
+    return (f"league {len(members(book))}/{settings.slots} snapshots, gate {slot.games}/"
+            f"{settings.gate_games} games at {rate:.2f} (needs {settings.gate_win:.2f})")
