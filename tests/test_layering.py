@@ -234,3 +234,14 @@ def test_a_violation_planted_in_a_copy_of_the_package_fails(tmp_path):
     line = text.splitlines().index(planted) + 1
     assert import_violations(copy, import_table(DOC)) == [
         f"rllib_pommer/data/collector.py:{line}: data/ imports rllib_pommer.imitation.learned"]
+
+
+def test_test_folders_mirror_the_packages():
+    """Tests of one package live in tests/<package>/; only tests across packages (jobs, the
+    examples, this file) stay at the top."""
+    tests = Path(__file__).resolve().parent
+    folders = {path.name for path in tests.iterdir() if (path / "__init__.py").is_file()}
+    packages = {path.name for path in PACKAGE.iterdir() if (path / "__init__.py").is_file()}
+    assert folders <= packages, sorted(folders - packages)
+    assert {"arena", "envs", "imitation", "util"} <= folders
+
