@@ -53,8 +53,8 @@ def main(argv: list[str] | None = None) -> int:
         parser.error("--out needs inputs")
     try:
         if args.card:
-            report = write_model_card(args.card, *exported_training(args.card),
-                                      _records(args.inputs))
+            records = _records(args.inputs)  # the inputs first: the folder may not be a card's
+            report = write_model_card(args.card, *exported_training(args.card), records)
         else:
             found = classify(args.inputs)
             training = (run_training(found["runs"], args.out / SUMMARIES)
