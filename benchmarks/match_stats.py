@@ -3,8 +3,9 @@
     python benchmarks/match_stats.py [--games 1000] [--seed 0]
 
 SimpleAgent on seats {0, 2} against SimpleAgent, StaticAgent and SimpleAgent_NoBomb, as in the
-reference protocol (README §3). For each statistic it prints ours, the reference's value and 95%
-interval, and whether ours falls inside it. Exit 1 if any does not. Not part of CI (minutes).
+reference protocol (docs/measurements.md, SimpleAgent match statistics). For each statistic it
+prints ours, the reference's value and 95% interval, and whether ours falls inside it. Exit 1 if
+any does not. Not part of CI (minutes).
 """
 
 from __future__ import annotations

@@ -5,8 +5,8 @@
 Inputs, all found in the repository: the campaigns' packed runs (`campaign/*`, Fig. 3 and the
 stage table), the arena records of the shipped policies (`docs/report/records/<policy>/*.jsonl`,
 Tables 2 and 3 and Fig. 4), the ladder if one has been built in `docs/report/ladder` (its
-command: README) and, for Fig. 5 and the game a person can watch, replays this script plays
-itself: each of `FIG5_TEAMS` against each of `FIG5_OPPONENTS`, `FIG5_GAMES` games (the
+command: docs/commands.md) and, for Fig. 5 and the game a person can watch, replays this script
+plays itself: each of `FIG5_TEAMS` against each of `FIG5_OPPONENTS`, `FIG5_GAMES` games (the
 paper's 50), seats balanced, seed 0. Replays are regenerated each time (about a minute) into
 `build/report_replays/` and not committed: same policies and seed, same games. A campaign still
 training is drawn as far as it has logged. Not part of CI.

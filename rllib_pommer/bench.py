@@ -4,8 +4,8 @@ side.
 Each target's measures live beside the code they measure; this job runs them, and for engine and
 agents compares with the reference's figures (tests/reference/reference_speed.json):
 
-- `engine`: protocol (a) of tests/reference/README.md §4 on the single-game and the batched API
-  (`game/speed.py`);
+- `engine`: protocol (a) of docs/measurements.md (speed protocols) on the single-game and the
+  batched API (`game/speed.py`);
 - `agents`: protocol (b), four SimpleAgents as one object per seat and as the batched kernel
   (`agents/speed.py`);
 - `train`: the quick curriculum's PPO for a few iterations on the real env and on a zero-cost twin

@@ -6,7 +6,7 @@
                      feed each SimpleAgent seat's recorded observations to a policy (default our
                      SimpleAgent); the last line is `agreement A on N decisions; stable S on K
                      decisions`
-    render FILE [--game K] --out OUT.png|OUT.gif [--step T] [--fog AGENT]
+    render FILE [--game K] --out OUT.png|OUT.gif [--step T]  [--fog AGENT]
                      draw game K: one step as a PNG (default the last) or every step as a GIF,
                      in full or as agent AGENT sees it
     html FILE [--game K] --out game.html

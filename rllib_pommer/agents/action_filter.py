@@ -1,7 +1,7 @@
 """The paper's Action Filter (Meisheri et al. 2019, Algorithm 2): veto actions that end in flames.
 
 From one agent's own observation we can tell exactly which visible cells will hold flames at the
-end of the coming step (rules §3.1, §3.11-3.13):
+end of the coming step (docs/rules.md §3.1, §3.11-3.13):
 
 * a flame observed with flame_life >= 2 survives the flame-ageing sub-step; one observed with
   flame_life 1 is removed at the start of the step, so its cell is safe to enter;
@@ -17,9 +17,9 @@ open ground, so a hidden wall never shortens a predicted ray.
 
 The filter judges an action by the cell the agent ends the step on: Stop and Bomb keep the current
 cell; a move onto an off-board, Rigid or Wood cell leaves the agent where it is; a move onto a cell
-held by a bomb or another agent may bounce (rules §3.4-3.7), so both cells must be safe; any other
-move ends on the target cell. Movement contests with other agents are not predicted: they depend
-on the other agents' actions, which are unknown.
+held by a bomb or another agent may bounce (docs/rules.md §3.4-3.7), so both cells must be safe;
+any other move ends on the target cell. Movement contests with other agents are not predicted:
+they depend on the other agents' actions, which are unknown.
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ MOVEMENT_ACTIONS = (Action.STOP, Action.UP, Action.DOWN, Action.LEFT, Action.RIG
 
 @njit(cache=True, inline="always")
 def _bomb_may_enter(board, r, c):
-    """Whether a moving bomb could advance onto (r, c) (rules §3.3); Fog counts as open."""
+    """Whether a moving bomb could advance onto (r, c) (docs/rules.md §3.3); Fog counts as open."""
     size = board.shape[0]
     if r < 0 or r >= size or c < 0 or c >= size:
         return False

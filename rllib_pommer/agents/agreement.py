@@ -1,4 +1,4 @@
-"""How often a policy picks the reference SimpleAgent's recorded action (reference README §7).
+"""How often a policy picks the reference SimpleAgent's recorded action (docs/measurements.md).
 
 By default the policy is our SimpleAgent (the fidelity check of the compiled kernel); any named
 policy can be measured by the same ruler, e.g. an imitation clone (greedy if its file says so).

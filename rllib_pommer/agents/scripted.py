@@ -99,7 +99,7 @@ class StaticAgent(ScriptedAgent):
 
 
 class RandomAgent(ScriptedAgent):
-    """Uniform over the six actions, ignoring the observation (rules §7)."""
+    """Uniform over the six actions, ignoring the observation (docs/rules.md §7)."""
 
     kind = "random"
 

@@ -1,4 +1,4 @@
-"""SimpleAgent, the reference's scripted baseline, compiled with numba and exact to rules §6.
+"""SimpleAgent, the reference's scripted baseline, compiled, exact to docs/rules.md §6.
 
 The reference agent is a Python rule list over dicts and queues; here one `njit` kernel decides for
 one agent from plain arrays (board, bomb strengths, own stats, memory, random stream), and a
@@ -34,7 +34,7 @@ EXTRA_BOMB, INCR_RANGE, KICK = int(Item.EXTRA_BOMB), int(Item.INCR_RANGE), int(I
 AGENT_DUMMY, AGENT0 = int(Item.AGENT_DUMMY), int(Item.AGENT0)
 TEAM_GAME = int(GameType.TEAM)
 
-# Direction orders of the different routines (rules §8 item 17).
+# Direction orders of the different routines (docs/rules.md §8 item 17).
 NEIGHBOUR_ORDER = np.array([UP, DOWN, LEFT, RIGHT], np.int64)
 ON_BOMB_ORDER = np.array([RIGHT, LEFT, UP, DOWN], np.int64)
 WANDER_ORDER = np.array([STOP, LEFT, RIGHT, UP, DOWN], np.int64)
@@ -69,7 +69,7 @@ def new_memory(m: int, rng: np.random.Generator) -> SimpleMemory:
 
 @njit(cache=True)
 def _passable(value: int, is_enemy: np.ndarray) -> bool:
-    """Rules §6.2: an agent, a power-up or Passage, and not an enemy."""
+    """docs/rules.md §6.2: an agent, a power-up or Passage, and not an enemy."""
     walkable = value == PASSAGE or EXTRA_BOMB <= value <= KICK or AGENT0 <= value <= AGENT0 + 3
     return walkable and not is_enemy[value]
 
@@ -89,7 +89,7 @@ def _enemy_mask(agent_id: int, game_type: int) -> np.ndarray:
 
 @njit(cache=True)
 def _search(board, me, is_enemy, rng, row):
-    """The depth-10 BFS of rules §6.3, with `random() < 0.5` tie-breaks in BFS order.
+    """The depth-10 BFS of docs/rules.md §6.3, with `random() < 0.5` tie-breaks in BFS order.
 
     Returns (is_node, dist, prev): non-nodes and unreached nodes have dist UNREACHED.
     """
@@ -134,7 +134,7 @@ def _search(board, me, is_enemy, rng, row):
 
 @njit(cache=True)
 def _nearest(board, is_node, dist, codes, radius) -> int:
-    """Rules §6.3 `nearest`: the LAST candidate (types in order, cells row-major) at minimal
+    """docs/rules.md §6.3 `nearest`: the LAST candidate (types in order, cells row-major) at minimal
     distance <= radius, as a flat cell index, or -1."""
     size = board.shape[0]
     best_dist = 0
@@ -181,7 +181,7 @@ def _in_bomb_line(r, c, bomb_cells, bomb_strengths, size) -> bool:
 
 @njit(cache=True)
 def _maybe_bomb(board, is_node, dist, me, ammo, blast_strength) -> bool:
-    """Rules §6.4: some reached Passage is farther than own strength or off own row and column."""
+    """§6.4: some reached Passage is farther than own strength or off own row and column."""
     if ammo < 1:
         return False
     size = board.shape[0]
@@ -197,8 +197,8 @@ def _maybe_bomb(board, is_node, dist, me, ammo, blast_strength) -> bool:
 
 @njit(cache=True)
 def _stuck(board, is_enemy, me, start, blast_range) -> bool:
-    """Rules §6.4 `stuck`: every cell reachable from `start` (with `me` now a bomb) lies on its
-    row or column within `blast_range`."""
+    """§6.4 `stuck`: every cell reachable from `start` (with `me` now a bomb) lies on its row or
+    column within `blast_range`."""
     size = board.shape[0]
     sr, sc = start // size, start % size
     seen = np.zeros((size, size), np.bool_)
@@ -236,7 +236,7 @@ def _add_unsafe(direction, strength, unsafe_range, unsafe_order) -> None:
 
 @njit(cache=True)
 def _safe_directions(board, is_enemy, me, unsafe_order, num_unsafe, unsafe_range, out) -> int:
-    """Rules §6.4 `find_safe_directions`, cases A and B; fills `out`, returns the count."""
+    """docs/rules.md §6.4 `find_safe_directions`, cases A and B; fills `out`, returns the count."""
     size = board.shape[0]
     mr, mc = me // size, me % size
     if num_unsafe == 4:
@@ -339,7 +339,7 @@ def decide(
     rng,
     row,
 ) -> int:
-    """One SimpleAgent decision (rules §6.5, R1..R8) from one agent's observation arrays.
+    """One SimpleAgent decision (docs/rules.md §6.5, R1..R8) from one agent's observation arrays.
 
     The memory arrays are batched; `row` selects this agent's entry, which is updated in place.
     """

@@ -1,4 +1,4 @@
-"""How fast SimpleAgent plays: protocol (b) of tests/reference/README.md §4, for `bench agents`.
+"""How fast SimpleAgent plays, for `bench agents`: protocol (b) of docs/measurements.md.
 
 One run plays `GAMES_PER_RUN` games of four SimpleAgents, game g of run r seeded
 2000 + 1000 r + g, and returns (steps/s, games/s) over the whole loop including reset: once with

@@ -23,7 +23,7 @@ moves a pair's score by at most 0.0025; 200 wins out of 200 read as a score of 0
 1,040 points). The ratings are t * 400 / ln 10, Elo's scale, centred at mean 0 over the
 ladder: 200 points above another policy means an expected score (a win plus half a tie) of
 1 / (1 + 10^(-200/400)) = 0.76 against it. The fit does not depend on the order of the games
-(openskill's online Weng-Lin updates do, and shrink large differences: README, The ladder).
+(openskill's online Weng-Lin updates do, and shrink large differences: docs/commands.md).
 
 Intervals. A 95% percentile bootstrap over games: each of `bootstrap` replicates draws every
 pair's games with replacement (as many as the pair played: its wins, losses and ties as one

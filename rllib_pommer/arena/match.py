@@ -202,7 +202,7 @@ def _agent_mix(spec: MatchSpec, game: int) -> str:
 
 
 def torch_threads_for_workers() -> None:
-    """One torch thread per process: the workers already fill the cores (rllib-notes §0)."""
+    """One torch thread per process: the workers already fill the cores."""
     torch.set_num_threads(1)
 
 

@@ -30,8 +30,8 @@ def mark_blast(board, mask, r, c, strength):
     """Set `mask` on every cell the bomb at (r, c) with `strength` sets on fire.
 
     Reach is strength - 1 cells per ray. The reference's "down" ray starts at distance 0, so it is
-    the one that marks the bomb's own cell (rules §3.12). Rigid stops a ray unmarked; Wood is marked
-    and stops it; nothing else stops it.
+    the one that marks the bomb's own cell (docs/rules.md §3.12). Rigid stops a ray unmarked; Wood
+    is marked and stops it; nothing else stops it.
     """
     _mark_ray(board, mask, r, c, -1, 0, 1, strength)
     _mark_ray(board, mask, r, c, 1, 0, 0, strength)

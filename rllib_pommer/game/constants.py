@@ -1,7 +1,7 @@
 """Codes and presets of the Pommerman game, as the reference implementation numbers them.
 
-The integer values are part of the recorded-game schema (../shared/reference/README.md §1), so they
-are fixed here once and every other module imports them by name.
+The integer values are part of the recorded-game schema (docs/rules.md §1,
+tests/reference/README.md), so they are fixed here once and every other module imports them by name.
 """
 
 from __future__ import annotations
@@ -96,7 +96,7 @@ class GameConfig:
 
     @property
     def blast_cap(self) -> int:
-        """IncrRange cap: the reference passes 'view size, or 10 if unset' (rules §1.4 quirk)."""
+        """IncrRange's cap: 'view size, or 10 if unset' (docs/rules.md §1.4)."""
         return self.view_radius if self.view_radius > 0 else 10
 
 

@@ -1,4 +1,4 @@
-"""Board generation with the reference's distribution and invariants (rules §2).
+"""Board generation with the reference's distribution and invariants (docs/rules.md §2).
 
 Randomness comes from a numpy Generator only.
 

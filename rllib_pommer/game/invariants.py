@@ -2,7 +2,7 @@
 
 Compiled, so that the property tests and the 10-million-step fuzz script (benchmarks/) share one
 check. The checks are deliberately independent of the step kernel's code paths: they re-derive
-what must hold from the rules (§3) rather than re-running the same logic.
+what must hold from the rules (docs/rules.md §3) rather than re-running the same logic.
 """
 
 from __future__ import annotations

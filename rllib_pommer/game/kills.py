@@ -4,7 +4,7 @@ The engine (`engine.Games.killers`) records, for every agent that dies, the bit 
 whose fire it died in: a bomb burns in the name of the agent who laid it (a kick does not change
 that) and, when another fire set it off, of everyone that fire burned for, down the whole chain;
 flames that linger keep the credit of the blast that lit them; where blasts overlap on a cell,
-their credits add up (docs/rules.md, "Who killed whom"). From the mask, each death has one cause,
+their credits add up (docs/rules.md §9). From the mask, each death has one cause,
 seen from the victim:
 
 * "self": the victim's own bomb is among them, whoever else's fire also reached it (the

@@ -3,7 +3,7 @@
 Every consumer (SimpleAgent and the other scripted agents, the action filter, the 19-plane
 featurizer, datasets, serving) reads this form. Each field has the same leading shape: (N, 4) when
 the engine emits the four agents of N games, () for one agent's observation. The content is the
-reference observation dict (rules §5), with the float maps stored as small integers.
+reference observation dict (docs/rules.md §5), with the float maps stored as small integers.
 """
 
 from __future__ import annotations

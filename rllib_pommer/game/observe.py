@@ -1,4 +1,4 @@
-"""Per-agent observations (rules §5), compiled: fog window, masked bomb and flame maps."""
+"""Per-agent observations (docs/rules.md §5), compiled: fog window, masked bomb and flame maps."""
 
 from __future__ import annotations
 

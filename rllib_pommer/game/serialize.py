@@ -1,4 +1,4 @@
-"""Conversion between our arrays and the reference's JSON schema (../shared/reference/README.md §2).
+"""Conversion between our arrays and the reference's JSON schema (tests/reference/README.md).
 
 Loading validates: every malformed input raises a ValueError naming the field and the value, so a
 bad state never reaches the compiled kernels.

@@ -1,4 +1,4 @@
-"""How fast the engine steps: protocol (a) of tests/reference/README.md §4, for `bench engine`.
+"""How fast the engine steps, for `bench engine`: protocol (a) of docs/measurements.md.
 
 One run plays `GAMES_PER_RUN` Team games with precomputed uniform random actions (max_steps x 4
 per game, seeded by the run number) until done, on the single-game API or on the batched one.

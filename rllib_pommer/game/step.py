@@ -1,6 +1,6 @@
 """The forward model: one step of one game, compiled, in the reference's exact sub-step order.
 
-Each function mirrors a sub-step of ../shared/docs/pommerman-rules.md §3 and says which. The claim
+Each function mirrors a sub-step of docs/rules.md §3 and says which. The claim
 counters and both settle loops reproduce the reference's quirks on purpose (counters that only grow,
 agent-bomb crossings that bounce only the bomb, boomerang and diagonal kicks): fidelity is checked
 by replaying the recorded reference games (`python -m rllib_pommer.replay verify`).
@@ -364,7 +364,7 @@ def _commit_moves(board, agents, bombs, n_bombs, actions, want, bwant, kicked_by
 def _explode(board, agents, bombs, meta, fire, burn, fresh):
     """§3.11-3.12: tick bombs; detonate (in waves, chains included) into the mask `fire`.
 
-    Kill credit (docs/rules.md, "Who killed whom") rides along without touching the state: each
+    Kill credit (docs/rules.md §9) rides along without touching the state: each
     detonating bomb burns in the name of its owner and of whoever's fire set it off (lingering
     flames' credit from `burn`, this step's from `fresh`), and ORs those agents' bits into `fresh`
     on every cell of its cross.

@@ -102,7 +102,7 @@ class BCConfig:
 
 
 def set_cpu_options(threads: int) -> None:
-    """The CPU settings that matter on small machines (rllib-notes §0): a fixed thread count,
+    """The CPU settings that matter on small machines: a fixed thread count,
     and flushing denormals, without which sparse binary planes slow the backward pass ~6x."""
     torch.set_num_threads(threads)
     torch.set_flush_denormal(True)

@@ -8,7 +8,7 @@
 
 About 94k parameters (0.4 MB as float32). Dropout is used in behaviour cloning only; with
 `dropout=0` its layers are identities, and since dropout has no parameters the same state_dict
-loads into either build (the PPO module's pi and its separate vf replica, rllib-notes §C).
+loads into either build (the PPO module's pi and its separate vf replica).
 """
 
 from __future__ import annotations

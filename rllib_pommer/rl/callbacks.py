@@ -4,7 +4,7 @@ The stage is a function of one number, the lifetime episode count over all env r
 (`env_runners/num_episodes_lifetime`), which RLlib checkpoints. So after every iteration, after a
 checkpoint is loaded, after env runners are recreated (RLlib builds them from the config it was
 given at the start) and when the algorithm is built, the callback recomputes the stage and pushes
-all of it again (idempotent and cheap, rllib-notes K2): the policy mapping on every env runner
+all of it again (idempotent and cheap): the policy mapping on every env runner
 (each runner's own config, as RLlib's `Algorithm.add_module` sets a new mapping there), reward
 mode and filter probabilities on every env, and pi's freeze on every learner (requires_grad is not
 checkpointed). The algorithm's own config, frozen by RLlib, is left as built: it keeps the first

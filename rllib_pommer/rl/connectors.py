@@ -5,7 +5,7 @@ The paper post-processes the policy's actions: the Action Filter (vetoes moves i
 episodes and the Jitter Correction (SimpleAgent takes over when the agent loops) in others. Doing
 it here rather than in the env means the executed action is the one stored in the episode: the
 piece overwrites the ACTIONS column and recomputes ACTION_LOGP from the module's logits, so PPO
-trains on what was executed with a consistent probability ratio (rllib-notes §E).
+trains on what was executed with a consistent probability ratio.
 
 Which filters are on is decided per episode by the env's seeded stream (the `filters` info) and
 read once per learner agent (two where the learner is its own teammate) into

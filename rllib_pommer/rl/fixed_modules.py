@@ -6,7 +6,7 @@ Which module plays a policy is its kind's `fixed` entry in the one table of kind
 rebuilt from the "raw" part of the observation (`game/raw_codec.py`). Whatever a rule remembers
 between steps (SimpleAgent's recent cells, previous direction and random stream; the random
 stream of Random and SmartRandom) is carried in RLlib's per-agent episode state (STATE_IN ->
-STATE_OUT, rllib-notes K1), packed into one int64 vector, so the module itself holds nothing that
+STATE_OUT), packed into one int64 vector, so the module itself holds nothing that
 the learner-to-runner weight sync could overwrite, and an episode split over several `sample()`
 calls keeps its memory. A row's stream is seeded on its first step from a hash of its first
 observation (board layout and seat), so seeded episodes replay exactly; a row whose state arrives

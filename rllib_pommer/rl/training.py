@@ -31,7 +31,7 @@ import ray
 import torch
 from ray import tune
 
-from . import ray_session, tune_state
+from . import quiet, ray_session, tune_state
 from .checkpoint_policy import trial_dirs, unreadable
 from .config import build_config, check_weights
 from .curriculum import Curriculum, load_curriculum
@@ -68,7 +68,9 @@ def init_ray(address: str | None, *, num_cpus: int = RunSettings.num_cpus,
     not start, a `RayStartError`."""
     torch.set_num_threads(torch_threads)
     torch.set_flush_denormal(True)
-    job_env = {"env_vars": {LEARNER_THREADS_ENV: str(torch_threads)}}  # for learner.py
+    quiet.silence()  # here, and in every worker through the hook below
+    job_env = {"env_vars": {LEARNER_THREADS_ENV: str(torch_threads)},  # for learner.py
+               "worker_process_setup_hook": "rllib_pommer.rl.quiet.silence"}
     if address is not None and address != "auto":
         host, _, port = address.removeprefix("ray://").rpartition(":")
         try:
@@ -115,7 +117,7 @@ class Progress(FreshOnRestore):
     """One line per iteration: stage, episodes, win/loss/tie, env steps/s and the time left in the
     stage and in the run, both at the games/s seen since the first result. The run's figure is a
     floor early on, since a curriculum's later games may last longer (the paper campaign's are
-    measured in the README's Speed section), so the line says whose pace it assumes. An iteration
+    measured in docs/measurements.md), so the line says whose pace it assumes. An iteration
     whose learner skipped updates for non-finite gradients (learner.py) says how many."""
 
     def __init__(self):
@@ -249,6 +251,8 @@ def start_run(settings: RunSettings, say=print) -> tuple[Curriculum, Path]:
     init_ray(settings.address, num_cpus=settings.num_cpus, torch_threads=settings.torch_threads)
     if settings.address is None:  # our own Ray: note it, for the next start to clean up after
         ray_session.record(out)
+    say(f"TensorBoard: tensorboard --logdir {out} (Tune's own hint below names a folder of the "
+        f"Ray session under /tmp/ray, not the run's)")
     return curriculum, out
 
 

@@ -1,4 +1,4 @@
-"""SimpleAgent against the reference's recorded decisions (reference README §7)."""
+"""SimpleAgent against the reference's recorded decisions (docs/measurements.md)."""
 
 from __future__ import annotations
 

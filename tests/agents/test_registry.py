@@ -14,8 +14,9 @@ from rllib_pommer.agents.registry import make_agent, policy_names, resolve_polic
 from rllib_pommer.agents.scripted import SmartRandom, StaticAgent, SuicideTeammate
 from rllib_pommer.agents.simple import SimpleAgent
 
-SHIPPED = ["imitation", "imitation_v1", "imitation_v2", "ppo", "ppo_cautious",
-           "ppo_team", "random", "simple", "simple_nobomb", "smart_random", "static", "suicide"]
+SHIPPED = ["imitation", "imitation_sampling", "imitation_v1", "imitation_v2", "ppo",
+           "ppo_cautious", "ppo_team", "random", "simple", "simple_nobomb", "smart_random",
+           "static", "suicide"]
 
 
 def layers(agent):

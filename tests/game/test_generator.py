@@ -1,4 +1,4 @@
-"""Board generation keeps the reference invariants (rules §2) for every seed."""
+"""Board generation keeps the reference invariants (docs/rules.md §2) for every seed."""
 
 from __future__ import annotations
 
