@@ -288,7 +288,8 @@ def training_curve(trial: Trial | Path, window: int = WINDOW) -> TrainingCurve:
     return TrainingCurve(trial.name, episodes, curve(means[known]), stages,
                          [str(row.get(REWARD_COLUMN) or "") for row in kept],
                          curve(_values(kept, "env_runners/learner_win")),
-                         curve(_values(kept, "env_runners/learner_loss")))
+                         curve(_values(kept, "env_runners/learner_loss")),
+                         curve(_values(kept, "env_runners/learner_kills")))
 
 
 def _phase_means(values: np.ndarray, counts: np.ndarray, stages: list[str],

@@ -29,6 +29,12 @@ class TrainingCurve:
     rewards: list[str]  # per row: "shaped", "raw" or "" (not known)
     wins: np.ndarray  # the learner's team's win rate, the same rolling mean (NaN: not logged)
     losses: np.ndarray
+    kills: np.ndarray | None = None  # enemies its team killed per game, the same mean (NaN: not
+    # logged; None: all NaN)
+
+    def __post_init__(self):
+        if self.kills is None:
+            self.kills = np.full(len(self.episodes), np.nan)
 
 
 @dataclass

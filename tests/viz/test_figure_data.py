@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from rllib_pommer.viz.behaviour import Heatmaps, heatmaps_by_opponent, to_top_left
-from rllib_pommer.viz.figures import FIG5_MARKS, plot_behaviour, plot_training
+from rllib_pommer.viz.figures import FIG5_MARKS, plot_behaviour, plot_outcomes, plot_training
 from rllib_pommer.viz.matches import Match, load_outcomes, match_of
 from rllib_pommer.viz.paper import PAPER_OPPONENTS, PAPER_TABLES, paper_table
 from rllib_pommer.viz.training import TrainingCurve
@@ -117,3 +117,17 @@ def test_fig5_names_its_policies_and_explains_its_marks(tmp_path):
     titles = [ax.get_title() for ax in fig.axes if ax.get_title()]
     assert titles[0].startswith("ppo+jitter vs StaticAgent: positions")
     assert fig.get_supxlabel() == FIG5_MARKS and "circle" in FIG5_MARKS
+
+
+def test_training_outcomes_draw_kills_where_a_run_logs_them(tmp_path):
+    episodes = np.arange(1, 5) * 100.0
+    logged = TrainingCurve("league", episodes, np.zeros(4), ["a"] * 4, ["raw_kills"] * 4,
+                           np.full(4, 0.5), np.full(4, 0.1), np.linspace(0.2, 0.8, 4))
+    silent = TrainingCurve("paper", episodes, np.zeros(4), ["a"] * 4, ["shaped"] * 4,
+                           np.full(4, 0.5), np.full(4, 0.1))
+    outcomes, kills = plot_outcomes([logged, silent], tmp_path / "o.png").axes
+    assert [t.get_text() for t in kills.get_legend().get_texts()] == ["league"]
+    assert "killed per game" in kills.get_ylabel()
+    assert len(plot_outcomes([silent], tmp_path / "o.png").axes) == 1
+    (axis,) = plot_training([logged], tmp_path / "fig3.png").axes
+    assert "credited kill" in axis.get_title()
