@@ -33,6 +33,7 @@ import numpy as np
 from PIL import Image
 
 import rllib_pommer.envs  # noqa: F401  (registers rllib_pommer/PommeTeam-v0)
+from rllib_pommer.game.constants import MAX_STEPS
 
 parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
 parser.add_argument("--episodes", type=int, default=100)
@@ -40,7 +41,7 @@ parser.add_argument("--batch", type=int, default=10, help="episodes per policy u
 parser.add_argument("--lr", type=float, default=0.01)
 parser.add_argument("--teammate", default="simple", help="policy name in seat 2")
 parser.add_argument("--opponents", default="simple", help="policy name in seats 1 and 3")
-parser.add_argument("--max-steps", type=int, default=800)
+parser.add_argument("--max-steps", type=int, default=MAX_STEPS)
 parser.add_argument("--seed", type=int, default=0)
 parser.add_argument("--gif", help="write the last episode to this .gif")
 parser.add_argument("--smoke", action="store_true", help="4 episodes of at most 60 steps")

@@ -36,6 +36,7 @@ from ray.rllib.core.rl_module.multi_rl_module import MultiRLModuleSpec
 from ray.rllib.core.rl_module.rl_module import RLModuleSpec
 
 from rllib_pommer.agents.registry import resolve_policy
+from rllib_pommer.game.constants import MAX_STEPS
 from rllib_pommer.rl.env import ENV_NAME
 from rllib_pommer.rl.fixed_modules import fixed_module_spec
 from rllib_pommer.rl.rl_module import PommerPPOModule
@@ -59,7 +60,7 @@ def team_mapping(agent_id, episode, **kwargs):
 
 if __name__ == "__main__":
     args = parser.parse_args()
-    iters, max_steps, batch = (1, 60, 400) if args.smoke else (args.iters, 800, 4000)
+    iters, max_steps, batch = (1, 60, 400) if args.smoke else (args.iters, MAX_STEPS, 4000)
 
     config = (
         PPOConfig()

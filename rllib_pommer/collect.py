@@ -54,7 +54,11 @@ def main(argv: list[str] | None = None) -> int:
                         help="DAgger opponents, comma-separated, taken in turn (default: "
                              "%(default)s)")
     args = parser.parse_args(argv)
-    dagger = Dagger(args.dagger, tuple(args.vs.split(","))) if args.dagger else None
+    dagger = None
+    if args.dagger:
+        from .imitation.learned import greedy_actor  # torch, for DAgger only
+
+        dagger = Dagger(args.dagger, tuple(args.vs.split(",")), greedy_actor)
     try:
         check_output_dir(args.out, "--out")
         collection = Collection(args.out, args.games, args.seed, args.shard_games,

@@ -4,7 +4,7 @@ and tables, as DIR/report.md with PNGs beside it.
 Each input is classified by its content:
 
 - a directory: the Tune trial directories in or below it (progress.csv or result.json) give
-  Fig. 3, the training reward per curriculum phase (columns: rllib_pommer/viz/training.py);
+  Fig. 3, the training reward per curriculum phase (columns: rllib_pommer/rl/history.py);
 - a .jsonl or .csv file of arena rows (`evaluate --records`, whose rows name their match; older
   files: a sidecar .json or the file name, see rllib_pommer/viz/matches.py) gives the
   win/loss/tie tables, with 95% intervals, in
@@ -26,8 +26,9 @@ import argparse
 import sys
 from pathlib import Path
 
+from .rl.history import exported_training, run_training
 from .viz.model_card import write_model_card
-from .viz.report import classify, write_report
+from .viz.report import SUMMARIES, classify, write_report
 
 
 def _records(paths: list[Path]) -> list[Path]:
@@ -52,9 +53,13 @@ def main(argv: list[str] | None = None) -> int:
         parser.error("--out needs inputs")
     try:
         if args.card:
-            report = write_model_card(args.card, _records(args.inputs))
+            records = _records(args.inputs)  # the inputs first: the folder may not be a card's
+            report = write_model_card(args.card, *exported_training(args.card), records)
         else:
-            report = write_report(args.inputs, args.out)
+            found = classify(args.inputs)
+            training = (run_training(found["runs"], args.out / SUMMARIES)
+                        if found["runs"] else None)
+            report = write_report(args.out, found, training)
     except (ValueError, OSError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

@@ -33,8 +33,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=0, help="seeds games sent without a seed")
     args = parser.parse_args(argv)
     # One observation per request: torch's intra-op threads cannot help a batch of one, and beside
-    # other busy processes they spin against them (an untrained PommerNet's act took 136 ms with
-    # two threads and 0.4 ms with one on the loaded 2-core dev box).
+    # other busy processes they spin against them (docs/measurements.md).
     torch.set_num_threads(1)
     if not 0 <= args.port < 65536:
         print(f"error: --port must be in 0..65535, got {args.port}", file=sys.stderr)

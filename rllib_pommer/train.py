@@ -140,13 +140,16 @@ def _export(parser: argparse.ArgumentParser, out: Path | None, target: Path) -> 
     if out is None:
         parser.error("--export needs --out RUN_DIR")
     from .rl.checkpoint_policy import export_policy
+    from .rl.history import exported_training
+    from .viz.model_card import write_model_card
 
     try:
         if not target.name or target.name == "..":
             raise ValueError(f"--export: no policy folder named (got {str(target)!r}); give "
                              f"POLICY_DIR, e.g. policies/ppo")
         check_output_dir(target, "--export")
-        weights, policy_file, card = export_policy(out, target)
+        weights, policy_file = export_policy(out, target)
+        card = write_model_card(target, *exported_training(target))
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

@@ -4,6 +4,9 @@ alone."""
 
 from __future__ import annotations
 
+import ast
+import re
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -92,6 +95,13 @@ def test_curricula_are_checked_without_ray_or_torch(tmp_path):
     assert _loaded(modules, ("ray", "torch", "gymnasium"), check) == ""
 
 
+def test_runs_are_reported_without_ray():
+    """The run history (rl/history.py) is read without Ray or torch, like the curriculum, and the
+    report job that reads it runs without Ray."""
+    assert _loaded(["rllib_pommer.rl.history"], ("ray", "torch")) == ""
+    assert _loaded(["rllib_pommer.report"], ("ray",)) == ""
+
+
 def test_nothing_below_rl_imports_rl():
     """Data flows one way: the game, agents, data, imitation, arena and the user envs never
     reach up into rl/, not even its Ray-free modules (the reward modes are the game's)."""
@@ -101,3 +111,137 @@ def test_nothing_below_rl_imports_rl():
             "print(','.join(sorted(m for m in sys.modules if m.startswith('rllib_pommer.rl'))))")
     assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           check=True).stdout.strip() == ""
+
+
+# Every import of our own package, against the table of docs/architecture.md.
+
+TABLE_HEADING = "## Who may import whom"
+JOBS = "*.py"  # the table's name for the top-level modules, the jobs
+ANY = "*"
+
+
+def import_table(doc: Path) -> dict[str, set[str]]:
+    """Package -> the packages it may import, from the Markdown table under `TABLE_HEADING`:
+    each row names a package (`game/`, or `*.py` for the jobs) and, in backquotes, the packages
+    it may import (`*`: any)."""
+    section = doc.read_text().split(TABLE_HEADING, 1)[1].lstrip("\n")
+    rows = section[section.index("\n|"):].strip("\n").split("\n\n", 1)[0]  # the first table
+    table = {}
+    for line in rows.splitlines():
+        cells = [cell.strip() for cell in line.strip().strip("|").split("|")]
+        if len(cells) != 2 or not cells[0].startswith("`"):
+            continue  # the header and its rule
+        names = [re.findall(r"`([^`]+)`", cell) for cell in cells]
+        table[names[0][0].rstrip("/")] = {name.rstrip("/") for name in names[1]}
+    return table
+
+
+def _layer(parts: list[str], package: Path) -> str:
+    """The table's name for the module `parts` below the package: its package, or `JOBS` for a
+    top-level module or the package itself."""
+    return parts[0] if parts and (package / parts[0]).is_dir() else JOBS
+
+
+def _is_module(parts: list[str], package: Path) -> bool:
+    path = package.joinpath(*parts)
+    return path.is_dir() or path.with_suffix(".py").is_file()
+
+
+def _imported(node: ast.Import | ast.ImportFrom, module: list[str], package: Path
+              ) -> list[list[str]]:
+    """The modules of ours an import statement names, as parts below the package, relative
+    imports resolved (`module`: the importing module's parts, a package as its `__init__`);
+    `from X import name` names the submodule X.name where there is one, else X."""
+    if isinstance(node, ast.Import):
+        names = [alias.name.split(".") for alias in node.names]
+    else:
+        if node.level:
+            target = module[: len(module) - node.level] + (node.module or "").split(".")
+        else:
+            target = node.module.split(".")
+        target = [part for part in target if part]
+        names = [target + [alias.name] if _is_module(target[1:] + [alias.name], package)
+                 else target for alias in node.names]
+    return [name[1:] for name in names if name[0] == package.name]
+
+
+def import_violations(package: Path, table: dict[str, set[str]]) -> list[str]:
+    """Every import of `package`'s own modules, at any depth of any module (inside functions
+    too), that the table does not allow, as "file:line: layer imports module"."""
+    found = []
+    for path in sorted(package.rglob("*.py")):
+        module = list(path.relative_to(package.parent).with_suffix("").parts)
+        layer = _layer(module[1:-1] if module[-1] == "__init__" else module[1:], package)
+        allowed = table.get(layer, set())
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            if not isinstance(node, (ast.Import, ast.ImportFrom)):
+                continue
+            for name in _imported(node, module, package):
+                target = _layer(name, package)
+                if target != layer and target not in allowed and ANY not in allowed:
+                    found.append(f"{path.relative_to(package.parent)}:{node.lineno}: {layer}/ "
+                                 f"imports {'.'.join([package.name, *name])}")
+    return found
+
+
+DOC = PACKAGE.parent / "docs" / "architecture.md"
+
+
+def test_the_table_names_every_package():
+    table = import_table(DOC)
+    packages = {path.name for path in PACKAGE.iterdir()
+                if path.is_dir() and (path / "__init__.py").is_file()}
+    assert set(table) == packages | {JOBS}
+    assert all(names <= set(table) | {ANY} for names in table.values()), table
+
+
+def test_every_import_of_our_package_is_one_the_table_allows():
+    assert import_violations(PACKAGE, import_table(DOC)) == []
+
+
+def test_the_checker_resolves_relative_and_nested_imports(tmp_path):
+    """A synthetic package: an upward import inside a function, relative or absolute, fails; a
+    downward one, `from . import x` and an import of the package itself pass."""
+    root = tmp_path / "rllib_pommer"
+    for module, text in {
+        "__init__.py": "",
+        "train.py": "from .rl import names\nfrom . import game\n",
+        "game/__init__.py": "from . import step\n",
+        "game/step.py": "import os\n\ndef f():\n    from ..rl import names\n    return names\n",
+        "game/seed.py": "def g():\n    import rllib_pommer.rl.names\n    from .. import train\n",
+        "rl/__init__.py": "",
+        "rl/names.py": "from ..game.step import f\nfrom rllib_pommer.game import seed\n",
+    }.items():
+        (root / module).parent.mkdir(parents=True, exist_ok=True)
+        (root / module).write_text(text)
+    table = {"game": set(), "rl": {"game"}, JOBS: {ANY}}
+    assert import_violations(root, table) == [
+        "rllib_pommer/game/seed.py:2: game/ imports rllib_pommer.rl.names",
+        "rllib_pommer/game/seed.py:3: game/ imports rllib_pommer.train",
+        "rllib_pommer/game/step.py:4: game/ imports rllib_pommer.rl.names",
+    ]
+
+
+def test_a_violation_planted_in_a_copy_of_the_package_fails(tmp_path):
+    """The collector reaching up into imitation/ again, inside a function as it once did."""
+    copy = shutil.copytree(PACKAGE, tmp_path / "rllib_pommer",
+                           ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.so"))
+    collector = copy / "data" / "collector.py"
+    planted = "    from ..imitation.learned import greedy_actor"
+    text = (f"{collector.read_text()}\n\ndef _actor(name):\n{planted}\n"
+            "    return greedy_actor(name)\n")
+    collector.write_text(text)
+    line = text.splitlines().index(planted) + 1
+    assert import_violations(copy, import_table(DOC)) == [
+        f"rllib_pommer/data/collector.py:{line}: data/ imports rllib_pommer.imitation.learned"]
+
+
+def test_test_folders_mirror_the_packages():
+    """Tests of one package live in tests/<package>/; only tests across packages (jobs, the
+    examples, this file) stay at the top."""
+    tests = Path(__file__).resolve().parent
+    folders = {path.name for path in tests.iterdir() if (path / "__init__.py").is_file()}
+    packages = {path.name for path in PACKAGE.iterdir() if (path / "__init__.py").is_file()}
+    assert folders <= packages, sorted(folders - packages)
+    assert {"arena", "envs", "imitation", "util"} <= folders
+

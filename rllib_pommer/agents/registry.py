@@ -66,6 +66,13 @@ class PolicySpec:
     params: Mapping[str, Any] = field(default_factory=dict)
     filters: tuple[str, ...] = ()
 
+    def file(self, key: str) -> Path:
+        """The absolute path that key `key` names, relative to the policy file (a learned
+        policy's weights, a checkpoint folder): a policy is found from any working directory."""
+        if key not in self.params:
+            raise ValueError(f"{self.path}: a {self.kind} policy needs a {key!r} key")
+        return (self.path.parent / self.params[key]).resolve()
+
 
 Factory = Callable[[PolicySpec], Agent]
 KeySpec = Mapping[str, tuple[type, bool]]  # key -> (type, required)
@@ -122,11 +129,12 @@ def _check_params(path: Path, kind: str, params: Mapping[str, Any]) -> None:
         raise ValueError(f"policy file {path}: kind {kind!r} needs key {missing[0]!r}")
 
 
-def _factory(kind: str) -> Factory:
-    """The factory of `kind`, importing the module that registers it the first time."""
+def registered(kind: str) -> Kind:
+    """The kind `kind` with its factory, importing the module that registers it the first time
+    (the one way plugin code is loaded: by the name `KINDS` gives)."""
     if KINDS[kind].build is None:
         importlib.import_module(KINDS[kind].plugin)
-    return KINDS[kind].build
+    return KINDS[kind]
 
 
 def register_kind(kind: str, factory: Factory) -> None:
@@ -206,7 +214,7 @@ def make_agent(name_or_path: str | os.PathLike, filters: Iterable[str] = ()) -> 
         raise ValueError(f"unknown filter(s) {unknown}; valid: {list(FILTERS)}")
     spec = resolve_policy(name_or_path)
     wanted = set(spec.filters) | set(filters)
-    agent = _factory(spec.kind)(spec)
+    agent = registered(spec.kind).build(spec)
     for filter_name, wrapper in FILTERS.items():
         if filter_name in wanted:
             agent = wrapper(agent)

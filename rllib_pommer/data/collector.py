@@ -25,7 +25,7 @@ import pyarrow.parquet as pq
 
 from ..game.constants import TEAM_PRESET
 from ..util.parallel import map_unordered
-from .dagger import check_setup, play_dagger_games
+from .dagger import Actor, check_setup, play_dagger_games
 from .expert import play_games
 from .schema import (
     SHARD_GLOB,
@@ -50,12 +50,20 @@ class ShardResult:
     bytes: int
 
 
+# A learned policy's name -> its batched actor and the file its weights were read from.
+ActorOf = Callable[[str], tuple[Actor, Path]]
+
+
 @dataclass(frozen=True)
 class Dagger:
-    """Who plays a DAgger dataset: the clone (a learned policy name or file) and its opponents."""
+    """Who plays a DAgger dataset: the clone (a learned policy name or file), its opponents, and
+    how the clone's name becomes its actor, given by the caller (`collect` passes
+    `imitation/learned.greedy_actor`): data/ lies below the learned policies. It must be a
+    module-level function, as it goes to the worker processes by reference."""
 
     policy: str
     opponents: tuple[str, ...]
+    actor_of: ActorOf
 
 
 def _sha256(path: Path) -> str:
@@ -71,9 +79,7 @@ def plan_shards(games: int, seed: int, shard_games: int, label_draws: int = 0,
     players = {}
     if dagger is not None:
         check_setup(dagger.opponents, label_draws)
-        from ..imitation.learned import greedy_actor  # torch, for DAgger only
-
-        _, weights = greedy_actor(dagger.policy)
+        _, weights = dagger.actor_of(dagger.policy)
         players = {"agents": "dagger", "policy": dagger.policy,
                    "policy_sha256": _sha256(weights), "opponents": ",".join(dagger.opponents)}
     return ShardPlan(games, ShardMeta(seed, 0, 0, shard_games, TEAM_PRESET.board_size,
@@ -98,13 +104,13 @@ class ShardPlan(Sequence):
                        stop_game=min(first + self.template.shard_games, self.games))
 
 
-def _play(meta: ShardMeta) -> Samples:
+def _play(meta: ShardMeta, actor_of: ActorOf | None) -> Samples:
     games = range(meta.first_game, meta.stop_game)
     if meta.agents != "dagger":
         return play_games(meta.seed, games, label_draws=meta.label_draws)
-    from ..imitation.learned import greedy_actor  # torch, for DAgger only
-
-    act, weights = greedy_actor(meta.policy)
+    if actor_of is None:
+        raise ValueError(f"{meta.policy}: a DAgger shard needs the clone's actor")
+    act, weights = actor_of(meta.policy)
     if _sha256(weights) != meta.policy_sha256:
         raise ValueError(f"{meta.policy}: its weights {weights} changed since this DAgger "
                          "dataset was planned")
@@ -120,9 +126,11 @@ def _fsync_dir(directory: Path) -> None:
         os.close(fd)
 
 
-def write_shard(out_dir: Path, index: int, meta: ShardMeta) -> ShardResult:
-    """Play the shard's games and publish the shard atomically under its final name."""
-    samples = _play(meta)
+def write_shard(out_dir: Path, index: int, meta: ShardMeta,
+                actor_of: ActorOf | None = None) -> ShardResult:
+    """Play the shard's games (a DAgger shard's clone acting by `actor_of`) and publish the
+    shard atomically under its final name."""
+    samples = _play(meta, actor_of)
     table = encode(samples, meta)
     final = out_dir / shard_name(index)
     temp = out_dir / f".{final.stem}.{os.getpid()}.tmp"
@@ -184,6 +192,7 @@ class Collection:
                  shard_games: int = SHARD_GAMES, label_draws: int = 0,
                  dagger: Dagger | None = None):
         self.out_dir = out_dir
+        self.actor_of = dagger.actor_of if dagger else None
         self.plan = plan_shards(games, seed, shard_games, label_draws, dagger)
         out_dir.mkdir(parents=True, exist_ok=True)
         self.results = finished_shards(out_dir, self.plan)
@@ -202,13 +211,13 @@ class Collection:
         for stale in self.out_dir.glob(TEMP_GLOB):
             stale.unlink()
         workers = min(workers or os.cpu_count() or 1, max(1, len(self.plan) - len(self.results)))
-        jobs = ((self.out_dir, i, self.plan[i]) for i in self._missing())
-        for (_, index, _), result in map_unordered(_write, jobs, workers, _die_with_parent):
+        jobs = ((self.out_dir, i, self.plan[i], self.actor_of) for i in self._missing())
+        for (_, index, _, _), result in map_unordered(_write, jobs, workers, _die_with_parent):
             self.results[index] = result
             if progress:
                 progress(result)
         return self.results
 
 
-def _write(job: tuple[Path, int, ShardMeta]) -> ShardResult:
+def _write(job: tuple[Path, int, ShardMeta, ActorOf | None]) -> ShardResult:
     return write_shard(*job)

@@ -24,7 +24,7 @@ from copy import deepcopy
 import gymnasium as gym
 
 from ..agents.registry import make_agent
-from ..game.constants import NUM_AGENTS, TEAM_PRESET
+from ..game.constants import MAX_STEPS, NUM_AGENTS, TEAM_PRESET
 from .team import ACTION_SPACE, RENDER_MODES, MultiAgentTeam, check_action, check_render_mode
 
 ENV_ID = "rllib_pommer/PommeTeam-v0"
@@ -38,7 +38,7 @@ class PommeTeamEnv(gym.Env):
     def __init__(self, render_mode: str | None = None, *, seat: int = 0,
                  teammate: str | os.PathLike = "simple",
                  opponents: str | os.PathLike | Sequence[str | os.PathLike] = "simple",
-                 reward: str = "shaped", observation: str = "planes", max_steps: int = 800):
+                 reward: str = "shaped", observation: str = "planes", max_steps: int = MAX_STEPS):
         self.render_mode = check_render_mode(render_mode)
         if seat not in range(NUM_AGENTS):
             raise ValueError(f"seat {seat!r} is not one of 0..{NUM_AGENTS - 1}")

@@ -33,7 +33,7 @@ from dataclasses import replace
 import gymnasium as gym
 import numpy as np
 
-from ..game.constants import NUM_ACTIONS, NUM_AGENTS, TEAM_PRESET
+from ..game.constants import BOARD_SIZE, NUM_ACTIONS, NUM_AGENTS, TEAM_PRESET
 from ..game.engine import Game
 from ..game.observation import Observation
 from ..game.raw_codec import RAW_SIZE, pack_raw
@@ -44,7 +44,7 @@ from ..viz.render import draw_frame
 
 RENDER_MODES = ["rgb_array"]  # of the PettingZoo and Gymnasium envs: `MultiAgentTeam.draw`
 
-PLANES_SPACE = gym.spaces.Box(0.0, 1.0, (NUM_PLANES, 11, 11), np.float32)
+PLANES_SPACE = gym.spaces.Box(0.0, 1.0, (NUM_PLANES, BOARD_SIZE, BOARD_SIZE), np.float32)
 OBSERVATION_SPACE = gym.spaces.Dict({
     "planes": PLANES_SPACE,
     "raw": gym.spaces.Box(0, np.iinfo(np.int16).max, (RAW_SIZE,), np.int16),
@@ -61,7 +61,7 @@ def _dict_rows(obs: Observation) -> list[dict[str, np.ndarray]]:
 OBSERVATIONS: dict[str, tuple[gym.Space, Callable[[Observation], list]]] = {
     "dict": (OBSERVATION_SPACE, _dict_rows),
     "planes": (PLANES_SPACE, lambda obs: list(featurize(obs))),
-    "planes_last": (gym.spaces.Box(0.0, 1.0, (11, 11, NUM_PLANES), np.float32),
+    "planes_last": (gym.spaces.Box(0.0, 1.0, (BOARD_SIZE, BOARD_SIZE, NUM_PLANES), np.float32),
                     lambda obs: list(np.moveaxis(featurize(obs), -3, -1))),
 }
 
@@ -102,10 +102,10 @@ def agent_observations(obs: Observation, form: str = "dict") -> dict[int, object
 class MultiAgentTeam:
     """The Team game with RLlib's multi-agent API and no Ray (module docstring).
 
-    config: seed, max_steps (default 800), reward ("shaped"|"raw"), observation ("dict"|"planes"|
-    "planes_last"), action_filter and jitter (per-episode activation probabilities of the
-    learner's filters). Other keys are ignored: subclasses read their own (the bench's
-    zero-cost env reads episode_length).
+    config: seed, max_steps (default the preset's), reward ("shaped"|"raw"), observation
+    ("dict"|"planes"|"planes_last"), action_filter and jitter (per-episode activation
+    probabilities of the learner's filters). Other keys are ignored: subclasses read their own
+    (the bench's zero-cost env reads episode_length).
     """
 
     def __init__(self, config: dict | None = None):

@@ -65,6 +65,8 @@ BOMB_LIFE_AT_LAYING = 10
 FLAME_LIFE_AT_CREATION = 2
 DEFAULT_BLAST_STRENGTH = 2
 DEFAULT_AMMO = 1
+BOARD_SIZE = 11  # both presets' boards; board generation supports this size alone
+MAX_STEPS = 800  # the step limit of both presets: a game still going then is a tie
 # (row, col) displacement of each action code; Stop and Bomb do not move.
 ACTION_DR = np.array([0, -1, 1, 0, 0, 0], dtype=np.int64)
 ACTION_DC = np.array([0, 0, 0, -1, 1, 0], dtype=np.int64)
@@ -73,9 +75,9 @@ GAME_ENV_STRING = "pommerman.envs.v0:Pomme"
 
 # Capacities of the fixed-shape state arrays. Bombs never share a cell, and a cell holds at most
 # three flame records (created on three consecutive steps), so these bound any reachable state.
-MAX_BOMBS = 121
-MAX_FLAMES = 3 * 121
-MAX_ITEMS = 121
+MAX_BOMBS = BOARD_SIZE * BOARD_SIZE
+MAX_FLAMES = 3 * MAX_BOMBS
+MAX_ITEMS = BOARD_SIZE * BOARD_SIZE
 
 
 @dataclass(frozen=True)
@@ -85,12 +87,12 @@ class GameConfig:
     name: str
     env_id: str
     game_type: GameType
-    board_size: int = 11
+    board_size: int = BOARD_SIZE
     num_rigid: int = 36
     num_wood: int = 36
     num_items: int = 20
     view_radius: int = -1  # -1: fully observable
-    max_steps: int = 800
+    max_steps: int = MAX_STEPS
 
     @property
     def blast_cap(self) -> int:

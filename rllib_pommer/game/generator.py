@@ -15,6 +15,7 @@ import numpy as np
 from numba import njit
 
 from .constants import (
+    BOARD_SIZE,
     DEFAULT_AMMO,
     DEFAULT_BLAST_STRENGTH,
     NUM_AGENTS,
@@ -47,7 +48,7 @@ def _layout(size: int) -> tuple[np.ndarray, list[tuple[int, int]], np.ndarray]:
     return skeleton, pairs, np.array(pairs, np.int64)
 
 
-_SKELETON, _PAIR_LIST, _PAIRS = _layout(11)
+_SKELETON, _PAIR_LIST, _PAIRS = _layout(BOARD_SIZE)
 
 
 @njit(cache=True)
@@ -80,8 +81,9 @@ def generate_board(
     rng: np.random.Generator, config: GameConfig
 ) -> tuple[np.ndarray, np.ndarray]:
     """A new board and its hidden items (rows [row, col, code] in placement order)."""
-    if config.board_size != 11 or config.num_rigid != 36 or config.num_wood != 36:
-        raise ValueError(f"board generation supports the 11x11 presets only, not {config.name!r}")
+    if config.board_size != BOARD_SIZE or config.num_rigid != 36 or config.num_wood != 36:
+        raise ValueError(f"board generation supports the {BOARD_SIZE}x{BOARD_SIZE} presets only, "
+                         f"not {config.name!r}")
     n_rigid_pairs = config.num_rigid // 2
     n_wood_pairs = (config.num_wood - 12) // 2
     while True:

@@ -12,7 +12,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .constants import NUM_AGENTS
+from .constants import BOARD_SIZE, NUM_AGENTS
 
 
 class Observation(NamedTuple):
@@ -55,7 +55,7 @@ class Observation(NamedTuple):
         return Observation(*(f.reshape((-1,) + f.shape[2:]) for f in self))
 
 
-def empty_observations(num_games: int, board_size: int = 11) -> Observation:
+def empty_observations(num_games: int, board_size: int = BOARD_SIZE) -> Observation:
     """Zeroed observation arrays for the four agents of `num_games` games."""
     lead = (num_games, NUM_AGENTS)
     plane = lead + (board_size, board_size)

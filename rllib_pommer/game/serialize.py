@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from .constants import (
+    BOARD_SIZE,
     GAME_ENV_STRING,
     MAX_BOMBS,
     MAX_FLAMES,
@@ -94,7 +95,7 @@ def _list(value: Any, where: str, capacity: int) -> Sequence:
 
 def load_state(d: Mapping, out: GameState | None = None, index: int = 0) -> GameState:
     """Fill game `index` of `out` (a new batch of one by default) from a reference state dict."""
-    board = _grid(_field(d, "board", "state"), "state.board", 11)
+    board = _grid(_field(d, "board", "state"), "state.board", BOARD_SIZE)
     size = board.shape[0]
     bad = sorted(set(np.unique(board).tolist()) - set(STATE_BOARD_CODES))
     if bad:
@@ -221,7 +222,7 @@ def load_observation(d: Mapping, agent_id: int) -> Observation:
     where = f"observation of agent {agent_id}"
     maps = {}
     for key in OBS_MAPS:
-        grid = _grid(_field(d, key, where), f"{where}.{key}", 11)
+        grid = _grid(_field(d, key, where), f"{where}.{key}", BOARD_SIZE)
         if grid.min() < 0 or grid.max() > 255:
             raise ValueError(f"{where}.{key}: values outside 0..255")
         maps[key] = grid.astype(np.uint8)

@@ -1,9 +1,9 @@
 """How fast the engine steps, for `bench engine`: protocol (a) of docs/measurements.md.
 
-One run plays `GAMES_PER_RUN` Team games with precomputed uniform random actions (800 x 4 per game,
-seeded by the run number) until done, on the single-game API or on the batched one. steps/s counts
-only the time inside the step calls (which build all four observations); games/s the whole reset
-plus steps. Each run returns (steps/s, games/s).
+One run plays `GAMES_PER_RUN` Team games with precomputed uniform random actions (max_steps x 4
+per game, seeded by the run number) until done, on the single-game API or on the batched one.
+steps/s counts only the time inside the step calls (which build all four observations); games/s
+the whole reset plus steps. Each run returns (steps/s, games/s).
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ GAMES_PER_RUN = 200
 
 
 def _run_actions(run: int) -> tuple[np.ndarray, np.ndarray]:
-    """Board seeds and an (games, 800, 4) action array for run `run`."""
+    """Board seeds and a (games, max_steps, 4) action array for run `run`."""
     rng = np.random.default_rng(1000 + run)
     seeds = rng.integers(0, 2**31, GAMES_PER_RUN)
     return seeds, rng.integers(0, NUM_ACTIONS, (GAMES_PER_RUN, TEAM_PRESET.max_steps, NUM_AGENTS))

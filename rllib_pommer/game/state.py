@@ -13,7 +13,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .constants import MAX_BOMBS, MAX_FLAMES, MAX_ITEMS, NUM_AGENTS
+from .constants import BOARD_SIZE, MAX_BOMBS, MAX_FLAMES, MAX_ITEMS, NUM_AGENTS
 
 # Columns of `GameState.agents` (N, 4, 6).
 A_ROW, A_COL, A_ALIVE, A_AMMO, A_BLAST, A_KICK = range(6)
@@ -61,7 +61,7 @@ class GameState(NamedTuple):
         return GameState(*(a[n : n + 1].copy() for a in self))
 
 
-def empty_state(num_games: int, board_size: int = 11) -> GameState:
+def empty_state(num_games: int, board_size: int = BOARD_SIZE) -> GameState:
     """Zeroed state arrays for `num_games` games."""
     return GameState(
         board=np.zeros((num_games, board_size, board_size), np.uint8),

@@ -78,8 +78,8 @@ class BCConfig:
     checkpoint_every: int = 1000  # batches
     max_batches_per_epoch: int | None = None
     max_val_batches: int | None = 100
-    # Speed (rllib_pommer.bench learn, one thread, batch 512): channels_last 1.36x and with bf16
-    # autocast 2.2x the samples/s of plain float32 NCHW. Validation always runs in float32.
+    # For speed (`bench learn`; docs/measurements.md): channels-last tensors and bfloat16
+    # autocast. Validation always runs in float32.
     channels_last: bool = True
     bf16: bool = True
     init: Path | None = None  # start from these pi weights (fine-tuning, e.g. after DAgger)

@@ -5,6 +5,12 @@ file) and how to act (`greedy = false` samples from the softmax with the agent's
 stream, as PPO's stochastic policy does; `true` takes the most likely action). Weights load with
 `torch.load(weights_only=True)`: plain tensors only, no arbitrary pickle.
 
+Both kinds of learned policy are played here: "learned" (a state_dict file) and, registered by
+`rl/checkpoint_policy.py`, "rllib_checkpoint" (a PPO run's learner). Each kind registers the key
+naming its path and the loader of its network (`register_learned_kind`); the path is resolved
+against the policy file (`PolicySpec.file`), and one network is loaded per (kind, path, greedy)
+(and the file's other keys, such as a checkpoint's `module`) in a process, whichever kind.
+
 Many agents of one policy can share one forward pass: `prefetch` computes the actions of a batch
 of agents from their observations and parks each one on its agent, whose next `act` returns it.
 The arena uses this to batch inference across the games a worker plays in lockstep; wrappers
@@ -13,15 +19,22 @@ The arena uses this to batch inference across the games a worker plays in lockst
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from functools import cache
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import torch
 
 from ..agents.base import innermost
-from ..agents.registry import PolicySpec, make_agent, register_kind, resolve_policy
+from ..agents.registry import (
+    PolicySpec,
+    make_agent,
+    register_kind,
+    registered,
+    resolve_policy,
+)
 from ..game.constants import NUM_ACTIONS
 from ..game.observation import Observation
 from .features import featurize
@@ -48,7 +61,7 @@ def load_policy_net(path: str | Path, num_outputs: int = NUM_ACTIONS) -> PommerN
 
 class LearnedPolicy:
     """One network shared by every agent of a policy in this process; `source` is the file its
-    weights were read from (a state_dict, or an RLlib checkpoint's module state)."""
+    weights were read from (a state_dict, or a checkpoint's module state)."""
 
     def __init__(self, net: PommerNet, greedy: bool, source: Path):
         self.net = net
@@ -95,28 +108,54 @@ class LearnedAgent:
         return action
 
 
+# A policy's path and its file's other keys (but `greedy`) -> its network and the file it read.
+Loader = Callable[[Path, Mapping[str, Any]], tuple[PommerNet, Path]]
+LOADERS: dict[str, tuple[str, Loader]] = {}  # kind -> (the key naming its path, its loader)
+
+
+def register_learned_kind(kind: str, key: str, load: Loader) -> None:
+    """Make policy files of `kind` playable as learned agents: `key` names the path (relative to
+    the file) that `load` reads a network from, given the file's other keys."""
+    LOADERS[kind] = (key, load)
+    register_kind(kind, lambda spec: LearnedAgent(_shared_policy(
+        kind, spec.file(key), bool(spec.params.get("greedy", False)), _options(spec, key))))
+
+
+def _options(spec: PolicySpec, key: str) -> tuple[tuple[str, Any], ...]:
+    """The policy file's keys that choose its network besides its path (e.g. a checkpoint's
+    `module`), hashable."""
+    return tuple(sorted((k, v) for k, v in spec.params.items() if k not in (key, "greedy")))
+
+
+def load_learned(spec: PolicySpec) -> tuple[PommerNet, Path]:
+    """A fresh network of a learned policy of any registered kind, and the file it was read
+    from."""
+    registered(spec.kind)  # a plugin kind's module registers its loader
+    if spec.kind not in LOADERS:
+        raise ValueError(f"policy {spec.name!r} (kind {spec.kind!r}) is not a learned policy; "
+                         f"learned kinds: {sorted(LOADERS)}")
+    key, load = LOADERS[spec.kind]
+    return load(spec.file(key), dict(_options(spec, key)))
+
+
 @cache
-def _shared_policy(weights: Path, greedy: bool) -> LearnedPolicy:
-    return LearnedPolicy(load_policy_net(weights), greedy, weights)
+def _shared_policy(kind: str, path: Path, greedy: bool,
+                   options: tuple[tuple[str, Any], ...]) -> LearnedPolicy:
+    net, source = LOADERS[kind][1](path, dict(options))
+    return LearnedPolicy(net, greedy, source)
 
 
-def weights_file(spec: PolicySpec) -> Path:
-    """The weights file a policy file of kind "learned" names (relative to that file)."""
-    if "weights" not in spec.params:
-        raise ValueError(f"{spec.path}: a learned policy needs a 'weights' key")
-    return (spec.path.parent / spec.params["weights"]).resolve()
+def _load_weights(path: Path, options: Mapping[str, Any]) -> tuple[PommerNet, Path]:
+    return load_policy_net(path), path
 
 
-def _learned_agent(spec: PolicySpec) -> LearnedAgent:
-    return LearnedAgent(_shared_policy(weights_file(spec), bool(spec.params.get("greedy", False))))
-
-
-register_kind("learned", _learned_agent)
+register_learned_kind("learned", "weights", _load_weights)
 
 
 def greedy_actor(name_or_path: str) -> tuple[Callable[[Observation], np.ndarray], Path]:
     """The most likely actions (B,) of a learned policy for observations (B,), batched, and the
-    weights file it reads (for a `rllib_checkpoint` policy, the checkpoint's module state)."""
+    file its weights were read from (for a `rllib_checkpoint` policy, the checkpoint's module
+    state). `data/` takes it as DAgger's actor from the caller (`collect --dagger`)."""
     spec = resolve_policy(name_or_path)
     agent = innermost(make_agent(name_or_path))
     if not isinstance(agent, LearnedAgent) or spec.filters:

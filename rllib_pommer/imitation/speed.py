@@ -31,7 +31,7 @@ from torch.nn import functional as F
 from torch.utils.flop_counter import FlopCounterMode
 
 from ..data.schema import Batch
-from ..game.constants import NUM_ACTIONS
+from ..game.constants import BOARD_SIZE, NUM_ACTIONS
 from ..game.observation import empty_observations
 from .bc import BCConfig, build_net, train_step
 from .features import NUM_PLANES
@@ -52,7 +52,7 @@ class PPOUpdate(Protocol):
 
 def sparse_planes(rows: int, seed: int = 0) -> torch.Tensor:
     generator = torch.Generator().manual_seed(seed)
-    return (torch.rand(rows, NUM_PLANES, 11, 11, generator=generator) < 0.1).float()
+    return (torch.rand(rows, NUM_PLANES, BOARD_SIZE, BOARD_SIZE, generator=generator) < 0.1).float()
 
 
 def _rate(step: Callable[[], int], seconds: float, warmup: int = 3) -> float:
@@ -103,7 +103,7 @@ def _bc_batch(rows: int, seed: int = 0) -> Batch:
     rng = np.random.default_rng(seed)
     obs = empty_observations(rows // 4 + 1).agent_rows().select(slice(0, rows))
     obs.board[:] = rng.choice([0, 0, 0, 1, 2, 5], size=obs.board.shape)
-    obs.position[:] = rng.integers(0, 11, size=obs.position.shape)
+    obs.position[:] = rng.integers(0, BOARD_SIZE, size=obs.position.shape)
     obs.game_type[:] = 2
     counts = rng.multinomial(16, [0.3, 0.2, 0.2, 0.1, 0.1, 0.1], size=rows).astype(np.uint8)
     return Batch(obs, rng.integers(0, NUM_ACTIONS, rows), counts)

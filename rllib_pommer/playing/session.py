@@ -54,8 +54,8 @@ class PlaySpec:
 
 def _one_torch_thread() -> None:
     """A learned seat decides one observation per step, where torch's intra-op threads cannot
-    help and only spin against the server (serve.py measured 136 ms against 0.4 ms per action on
-    a loaded 2-core box). torch is only here if a learned policy was named."""
+    help and only spin against the server, many times slower than one thread on a loaded machine
+    (docs/measurements.md). torch is only here if a learned policy was named."""
     torch = sys.modules.get("torch")
     if torch is not None:
         torch.set_num_threads(1)

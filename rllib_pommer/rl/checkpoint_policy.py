@@ -7,7 +7,8 @@ names a checkpoint folder, a Tune trial folder (its latest `checkpoint_*` is use
 holding one or more trials (the newest checkpoint among them). The module played is the learner's
 unless `module` names another module of the checkpoint. The learner's pi weights are read straight
 from the module's saved state, without rebuilding the RLlib module (which would want the imitation
-weights it started from), into a `PommerNet`, and played by `learned.LearnedPolicy`.
+weights it started from), into a `PommerNet`, and played as the "learned" kind is
+(`learned.register_learned_kind`: the same path resolution, cache and agents).
 
 A checkpoint folder may come from anyone, and a pickle can name any callable to run while it
 loads: the module state is read by `StateUnpickler`, which builds dicts and numpy arrays and
@@ -25,17 +26,26 @@ import pickle
 import pickletools
 import subprocess
 import typing
-from functools import cache
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 import torch
 
-from ..agents.registry import PolicySpec, policy_names, register_kind, resolve_policy
+from ..agents.registry import policy_names, resolve_policy
 from ..game.constants import NUM_ACTIONS
-from ..imitation.learned import LearnedAgent, LearnedPolicy, load_policy_net, weights_file
+from ..imitation.learned import load_policy_net, register_learned_kind
 from ..imitation.network import PommerNet
-from ..viz.training import HISTORY_FILE, Trial, number, read_trial, write_summary
 from .curriculum import Curriculum, run_curriculum
+from .history import (
+    HISTORY_FILE,
+    POLICY_HISTORY_DIR,
+    POLICY_SOURCE_FILE,
+    Trial,
+    number,
+    read_trial,
+    write_summary,
+)
 
 MODULES_DIR = Path("learner_group/learner/rl_module")
 MODULE_STATE = MODULES_DIR / "learner" / "module_state.pkl"
@@ -268,7 +278,7 @@ def starting_policy(run: Path, curriculum: Curriculum, exclude: str = "") -> str
         spec = resolve_policy(name)
         if name == exclude or spec.kind != "learned":
             continue
-        weights = load_policy_net(weights_file(spec)).state_dict()  # both PommerNets: same keys
+        weights = load_policy_net(spec.file("weights")).state_dict()  # both PommerNets: same keys
         if all(torch.equal(weights[key], value) for key, value in start.items()):
             return name
     return None
@@ -276,7 +286,7 @@ def starting_policy(run: Path, curriculum: Curriculum, exclude: str = "") -> str
 
 def _source(policy: str, checkpoint: Path, trial: Trial, iteration: int,
             curriculum: Curriculum) -> dict:
-    """What `viz/model_card.py` says of where a policy came from."""
+    """Where a policy came from, as its model card says (`viz/model_card.py`)."""
     run = checkpoint.parents[1]
     return {
         "policy": policy, "run": run.name, "trial": trial.path.name,
@@ -289,17 +299,17 @@ def _source(policy: str, checkpoint: Path, trial: Trial, iteration: int,
     }
 
 
-def export_policy(source: str | Path, target: str | Path) -> tuple[Path, Path, Path]:
+def export_policy(source: str | Path, target: str | Path) -> tuple[Path, Path]:
     """Ship the learner of a checkpoint, trial or run folder as a policy like `imitation`:
     `target/pi.pt`, a plain state_dict that `torch.load(weights_only=True)` reads, its value
     network as `target/vf.pt` (for a run that continues it: a curriculum's `vf_weights`),
-    `target.toml` (kind learned, sampling, as the arena plays a run folder) and the model card
-    `target/MODEL_CARD.md` with what it is drawn from (viz/model_card.py): the trial's rows up to
-    the checkpoint and `source.json`. Existing weights or policy files are never replaced."""
-    # imported here: bc loads TensorBoard and the dataset reader, the card matplotlib, which
-    # playing a checkpoint never needs
+    `target.toml` (kind learned, sampling, as the arena plays a run folder), and what its model
+    card is drawn from (`history.exported_training`; the job draws the card): the trial's rows up
+    to the checkpoint and `source.json`. Existing weights or policy files are never replaced."""
+    # imported here: bc loads TensorBoard and the dataset reader, the card's module matplotlib,
+    # which playing a checkpoint never needs
     from ..imitation.bc import WEIGHTS_FILE, write_policy_file
-    from ..viz.model_card import CARD_FILE, SOURCE_FILE, TRAINING_DIR, write_model_card
+    from ..viz.model_card import CARD_FILE
 
     checkpoint = latest_checkpoint(source).resolve()
     net = load_checkpoint_net(checkpoint)
@@ -320,29 +330,19 @@ def export_policy(source: str | Path, target: str | Path) -> tuple[Path, Path, P
     torch.save(load_checkpoint_net(checkpoint, "vf").state_dict(), target / VF_WEIGHTS_FILE)
     write_policy_file(target, f"PPO learner exported from {checkpoint.parent.name}/"
                               f"{checkpoint.name}; see {target.name}/{CARD_FILE}", greedy=False)
-    write_summary(Trial(trial.path, rows), target / TRAINING_DIR / trial.name)
-    (target / SOURCE_FILE).write_text(json.dumps(
+    write_summary(Trial(trial.path, rows), target / POLICY_HISTORY_DIR / trial.name)
+    (target / POLICY_SOURCE_FILE).write_text(json.dumps(
         _source(target.name, checkpoint, Trial(trial.path, rows), iteration, curriculum),
         indent=1) + "\n")
-    return weights, policy_file, write_model_card(target)
+    return weights, policy_file
 
 
-@cache
-def _shared_policy(path: Path, greedy: bool, module: str) -> LearnedPolicy:
-    checkpoint = latest_checkpoint(path)
-    return LearnedPolicy(load_checkpoint_net(checkpoint, module=module), greedy,
-                         checkpoint / MODULES_DIR / module / "module_state.pkl")
+def _load_checkpoint(path: Path, options: Mapping[str, Any]) -> tuple[PommerNet, Path]:
+    """The network of the checkpoint's module `options["module"]` (default the learner's) and
+    the module state it was read from."""
+    module = options.get("module", "learner")
+    return (load_checkpoint_net(path, module=module),
+            latest_checkpoint(path) / MODULES_DIR / module / "module_state.pkl")
 
 
-def checkpoint_path(spec: PolicySpec) -> Path:
-    if "checkpoint" not in spec.params:
-        raise ValueError(f"{spec.path}: an rllib_checkpoint policy needs a 'checkpoint' key")
-    return (spec.path.parent / spec.params["checkpoint"]).resolve()
-
-
-def _checkpoint_agent(spec: PolicySpec) -> LearnedAgent:
-    return LearnedAgent(_shared_policy(checkpoint_path(spec), bool(spec.params.get("greedy")),
-                                       spec.params.get("module", "learner")))
-
-
-register_kind("rllib_checkpoint", _checkpoint_agent)
+register_learned_kind("rllib_checkpoint", "checkpoint", _load_checkpoint)

@@ -1,51 +1,41 @@
 """The PPOConfig of a curriculum: env, modules, mapping, connectors, callback and PPO settings.
 
-Paper settings (fixed): entropy coefficient 0, clip 0.01, minibatch 128, no dropout.
-Others (our choices, overridable in a curriculum's [ppo] table; every value with its default in
-`settings.PPOSettings`): lr 1e-4 (small, to stay near the imitation policy); gamma 0.999,
-because every outcome is paid at the end and with 0.99 a tie's -1 some 400 steps away is worth
--0.02 now, so waiting out the clock beats any risky attack (measured: the quick curriculum at 0.99
-and lr 3e-4 ended with every training game tied); GAE lambda 0.95; 4 epochs over batches of 4,000
-env steps (~3,500 learner rows; all four agents step, and the learner's rows are the ones
-trained); value loss coefficient 1 with RLlib's default value clip 10 (returns are within
-[-1, 1]); no KL penalty (the clip does the work); no dual clip (learner.py; a curriculum's
-`dual_clip` sets its bound); gradient norm clip 10; 8 envs per env runner
-(batched inference). More envs amortise RLlib's per-step connector and inference
-calls: against SimpleAgents, sampling alone ran 1.16x the env steps/s with 16, 1.47x with 32 and
-1.55x with 64, and whole iterations (4 epochs of learning included) 1.13x with 32 (medians of 4-5
-interleaved rounds in one process, both campaigns on the cores, 2026-12-03). The campaigns and
-their ablations keep 8 so that they stay comparable; a new run may set `num_envs_per_env_runner`
-in its [ppo] table (a short run, as `quick`, finishes fewer episodes per iteration with more).
+Paper settings (fixed): entropy coefficient 0, clip 0.01, minibatch 128, no dropout. The others
+are our choices, each a default of `settings.PPOSettings` that a curriculum's [ppo] table may
+override:
+
+- lr 1e-4: small, so that pi stays near the imitation policy it starts from;
+- gamma 0.999: every outcome is paid at a game's end, up to `MAX_STEPS` steps away; with 0.99 a
+  tie's -1 some 400 steps away is worth -0.02 now, so waiting out the clock beats any risky
+  attack;
+- GAE lambda 0.95; 4 epochs over batches of 4,000 env steps (all four agents step, and the
+  learner's rows are the ones trained);
+- value loss coefficient 1 with RLlib's value clip 10 (returns lie in [-1, 1]); no KL penalty
+  (the clip does the work); no dual clip unless a curriculum sets `dual_clip` (learner.py);
+  gradient norm clip 10;
+- 8 envs per env runner: inference is batched over them, and more envs amortise RLlib's per-step
+  connector and inference calls; the campaigns keep 8 so that they stay comparable, and a run
+  may set `num_envs_per_env_runner` in its [ppo] table.
 
 Layout (`train --num-env-runners N --torch-threads T`, not PPO's arithmetic): by default the
 algorithm's process samples and learns on one thread, so two runs share a 2-core machine, one per
-core, which is the most work per hour when there are several runs to do. A run alone on the 2
-cores goes faster with 2 remote env runners and 2 learner threads (`bench layout`, quick
-curriculum, side by side: 1.36x and 1.59x the env steps/s of the default in two runs; 2 runners
-and 1 thread 1.37x; 1 runner and 2 threads 1.03x; the paper curriculum's ETA on its progress
-line, alone, 13 h 33 min with the default and 9 h 56 min with 2 + 2). Tune restores a trial
-with the config it started with, so a run keeps its number of env runners when resumed
-(training.kept_layouts says so); the learner's threads are the command's.
+core, the most work per hour when there are several runs to do; a run alone on 2 cores goes
+faster with 2 remote env runners and 2 learner threads (`bench layout` compares them). Tune
+restores a trial with the config it started with, so a resumed run keeps its number of env
+runners (training.kept_layouts says so); the learner's threads are the command's.
 
-Speed settings, none of which changes what PPO computes (`python -m rllib_pommer.bench learn`
-and `bench train`, one core, figures in docs/measurements.md):
-- the module (rl_module.py) runs pi and vf channels-last and vf under bfloat16 autocast; with
-  the fused Adam of learner.py the learner trains 1.21x the samples/s of the same update in plain
-  float32 NCHW torch (0.77x before any of these). pi ran under bfloat16 too until the paper
-  campaign's first run collapsed at ~93,000 games (1.52x then): its rounding moves PPO's ratio
-  past the clip (rl_module.py, with the measurement), so pi is float32 from that run's restart
-  at 83,562 games on, and in every run started or resumed since (the restart drifted as well:
-  the rounding was not the cause, but PPO's ratio should not carry it);
-- `episodes_to_numpy=False`: RLlib's env runner converts every finished episode of a sample call
-  to numpy again after each env step (quadratic in the episodes per call; 28% of sampling time in
-  a profile of the paper curriculum); the learner connector batches lists as well, so episodes
-  stay lists: sampling 1.2-1.6x, a whole iteration 1.1-1.2x the env steps/s (measured side by
-  side while another job shared the machine);
+Speed settings, none of which changes what PPO computes:
+
+- the module (rl_module.py) runs pi and vf channels-last and vf under bfloat16 autocast, and the
+  learner (learner.py) uses fused Adam; pi stays float32 (rl_module.py says why);
+- `episodes_to_numpy=False`: RLlib's env runner would convert every finished episode of a sample
+  call to numpy again after each env step (quadratic in the episodes per call); the learner
+  connector batches lists as well, so episodes stay lists;
 - the learner's connector batches only the agents of trained modules (`learner.py`,
-  `trained_agents.py`): RLlib builds every agent's rows and then drops the fixed seats'; the
-  learner batch is bit-identical, and the connector takes 0.33 s instead of 2.27 s on one
-  iteration of the paper curriculum, 0.33 s instead of 1.91 s on the quick one (`bench learn`,
-  side by side, both campaigns on the cores).
+  `trained_agents.py`) instead of building every agent's rows and dropping the fixed seats'; the
+  learner batch is the same.
+
+What each choice was measured to gain: docs/measurements.md.
 """
 
 from __future__ import annotations

@@ -31,8 +31,7 @@ from ..agents.registry import KINDS, resolve_policy
 from ..agents.scripted import RULES
 from ..agents.simple import RECENT_LENGTH, SimpleMemory
 from ..game.raw_codec import unpack_raw
-from ..imitation.learned import load_policy_net, weights_file
-from .checkpoint_policy import checkpoint_path, load_checkpoint_net
+from ..imitation.learned import load_learned
 
 # Packed memory: recent cells (6 x 2), recent_len, prev_dir, rng state (uint64 bits), seeded flag.
 _RECENT = 2 * RECENT_LENGTH
@@ -119,11 +118,7 @@ class FrozenNetModule(TorchRLModule):
 
     def setup(self):
         spec = resolve_policy(self.model_config["policy"])
-        if spec.kind == "learned":
-            net = load_policy_net(weights_file(spec))
-        else:
-            net = load_checkpoint_net(checkpoint_path(spec),
-                                      module=spec.params.get("module", "learner"))
+        net, _ = load_learned(spec)
         self.pi = net.requires_grad_(False)
         self.greedy = bool(spec.params.get("greedy", False))
 

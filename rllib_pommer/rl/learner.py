@@ -3,10 +3,10 @@ trains, it never trains a pi without weights, it skips an update whose gradients
 and it can bound the ratio of rows with a negative advantage (dual clip, off by default).
 
 RLlib's default optimizer is `torch.optim.Adam` with its per-tensor Python loop; the fused CPU
-kernel updates all of a module's parameters in one call: 0.18 ms instead of 0.65 ms per minibatch
-for pi and vf together (one thread), the same arithmetic.
+kernel updates all of a module's parameters in one call, the same arithmetic in a fraction of the
+time (docs/measurements.md).
 
-Its learner connector starts with `TrainedAgentsOnly` (trained_agents.py, with the measurement),
+Its learner connector starts with `TrainedAgentsOnly` (trained_agents.py),
 set here rather than in the config so that runs restored with an older config get it.
 
 Before every update the learner module must have its pi from the imitation weights or from a
@@ -17,17 +17,15 @@ A minibatch with a non-finite gradient is skipped whole: no optimizer step, Adam
 RLlib's default instead replaces nan by 0 and inf by the largest float32 and steps, which sets
 Adam's second moment of every such weight to inf for good; its `torch_skip_nan_gradients=True`
 does not help, as RLlib 2.60 then steps with the non-finite gradients as they are (and a restored
-run keeps the config it started with). The paper campaign's first run met
-this at 81,100 games (6,770 warnings until 100,000): from then its training win rate against
-SimpleAgent fell from 0.76 to 0.24 and pi's logit spread (largest minus smallest logit, median
-over the decisions of 16 games) grew from about 20 to 8,100, so that it never placed a bomb against
-StaticAgent. Each iteration logs how many updates it skipped (`nonfinite_updates_skipped`) and
-the largest batch-mean logit spread pi produced (`pi_logit_spread`), and the extremes of PPO's
-log-ratio (`pi_log_ratio_max`, `pi_log_ratio_min`: `_log_pi_health`), all kept in history.csv,
-and the same extremes over the rows whose action pi gave a log-probability below -10 when it
-sampled (`pi_rare_log_ratio_max`, `_min`; `pi_rare_rows` counts them once per epoch): at ~3,500
-rows per iteration pi itself draws such an action about once in a thousand iterations, so these
-are the filters' overrides.
+run keeps the config it started with). One such step ruins pi for good: the training win rate
+collapses and pi's logit spread (largest minus smallest logit) grows by orders of magnitude, as
+in the paper campaign's first run (docs/measurements.md). Each iteration logs how many updates
+it skipped (`nonfinite_updates_skipped`) and the largest batch-mean logit spread pi produced
+(`pi_logit_spread`), and the extremes of PPO's log-ratio (`pi_log_ratio_max`,
+`pi_log_ratio_min`: `_log_pi_health`), all kept in history.csv, and the same extremes over the
+rows whose action pi gave a log-probability below -10 when it sampled (`pi_rare_log_ratio_max`,
+`_min`; `pi_rare_rows` counts them once per epoch): at ~3,500 rows per iteration pi itself draws
+such an action about once in a thousand iterations, so these are the filters' overrides.
 
 Dual clip (Ye et al. 2020, "Mastering Complex Control in MOBA Games with Deep RL"): PPO's clipped
 loss bounds the ratio r of a row with a positive advantage, but weights a row with a negative

@@ -21,7 +21,6 @@ from pathlib import Path
 
 from ray import tune
 
-from ..viz.training import HISTORY_FILE, Trial, number, read_trial, write_summary
 from . import ray_session, tune_state
 from .checkpoint_policy import (
     checkpoint_age,
@@ -29,6 +28,7 @@ from .checkpoint_policy import (
     checkpoint_iteration,
     trial_dirs,
 )
+from .history import HISTORY_FILE, Trial, number, read_trial, write_summary
 from .tune_state import STATE_PATTERNS
 
 
@@ -145,7 +145,7 @@ def _results(path: Path) -> list[tuple[str, dict]]:
 def _result_at(rows: list[tuple[str, dict]], summary: Trial, iteration: int) -> dict:
     """The result of `iteration` (the newest such line of result.json), as Tune records beside a
     checkpoint, its clock taken from the trial's summary rows (one clock over every restore,
-    viz/training.py). If no line survived (a pack repeated after the first cut result.json to
+    rl/history.py). If no line survived (a pack repeated after the first cut result.json to
     a later iteration's line, or a run killed before Tune copied its result files to the run
     folder), the iteration and its clock alone: Tune's trainable restores its iteration counter
     and clock from these metrics; from {} it would number the resumed iterations from 1 again

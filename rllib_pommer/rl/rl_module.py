@@ -14,22 +14,15 @@ not an error here: pi starts empty and `pi_source` says so, until `set_state` fi
 module that is about to be trained with neither source is wrong, and the learner refuses that
 (`require_pi`); a new run's weights file is checked before Ray starts (config.check_weights).
 
-Precision and speed (`python -m rllib_pommer.bench learn`, one thread): both networks keep their
-tensors channels-last, which oneDNN's CPU convolutions run about 1.4x faster than NCHW. vf runs
-under bfloat16 autocast (about 1.6x faster again on CPUs with AVX-512 BF16); pi runs in float32,
-on the env runners as in the learner, because PPO's ratio compares pi's log-probabilities before
-and after updates through a clip of 1 +- 0.01, and bfloat16 rounds a logit of magnitude m to a
-step of up to m/128: one Adam-sized step (every weight moved by 1e-4) moved the log-probabilities of
-actions below e^-10, the ones a filter override puts into the batch, by p99 0.25 (max 0.38) in
-bfloat16 against 0.047 (max 0.060) in float32, on the paper run's checkpoint at 83,562 games; on
-its collapsed end (logit spread ~1,000) by p99 4.0 (max 10) against 0.56
-(`benchmarks/logit_precision.py`). Rounding alone thus swung ratios far past the clip, and with a
-negative advantage PPO weights a row by its whole ratio: the paper campaign's run in bfloat16
-collapsed from ~93,000 games (log-ratio up to 72). Float32 alone did not prevent that (continued
-in float32 from 83,562 games, the run drifted the same way, sooner: docs/results.md); it removes
-the rounding, and `learner.py`'s dual clip bounds such rows. Float32 results differ across batch
-sizes (1 to 128 rows against 410) by 1.1e-5 in a log-probability at most (2.4e-4 at the
-collapsed end), far inside the clip.
+Precision and speed: both networks keep their tensors channels-last, which oneDNN's CPU
+convolutions run faster than NCHW, and vf runs under bfloat16 autocast. pi runs in float32, on
+the env runners as in the learner, because PPO's ratio compares pi's log-probabilities before and
+after updates through a clip of 1 +- 0.01, and bfloat16 rounds a logit of magnitude m to a step
+of up to m/128: rounding alone moves the log-probabilities of rare actions (those a filter
+override puts into the batch) far past the clip, and with a negative advantage PPO weights a row
+by its whole ratio. Float32 removes the rounding (its results differ across batch sizes far
+inside the clip), and `learner.py`'s dual clip bounds such rows. The measurements
+(`benchmarks/logit_precision.py`, the paper campaign's collapse): docs/measurements.md.
 
 A curriculum may also name `vf_weights`, a value network's state_dict, for a run that continues
 another's (its pi and vf exported from a checkpoint) without a value warm-up; like pi's file it

@@ -4,12 +4,10 @@ itself as often as the code now asks.
 Tune resumes a trial from the checkpoint its experiment state registered last, and names the
 trial's next checkpoints from a counter kept in the same state. Neither need agree with the
 folder. A run stopped between the trial writing a checkpoint and the driver registering it
-leaves a newer checkpoint the state does not name (the cautious campaign, stopped on
-2026-12-02: the state named checkpoint_000036, iteration 1025, beside checkpoint_000037,
-iteration 1050; packing kept the newer and the resume failed on the missing older one). And the
-counter lags the names on disk (that state's counter said 35), so a resumed trial writes names
-it already holds, and evicting the checkpoint it resumed from deletes whatever now sits under
-that name.
+leaves a newer checkpoint the state does not name: packing keeps the newer, and the resume would
+fail on the missing older one. And the counter can lag the names on disk, so a resumed trial
+writes names it already holds, and evicting the checkpoint it resumed from deletes whatever now
+sits under that name (both seen in a campaign: docs/measurements.md).
 
 `register_only` rewrites the newest state file so that each packed trial has exactly the kept
 checkpoint registered, with the results of its iteration, and a counter that continues after
@@ -20,9 +18,8 @@ whose state named an older checkpoint.
 
 `set_snapshot_period`: Tune restores its controller's attributes from the state, the period of
 its own state saves among them, so a resumed run saves as often as its first start said, whatever
-`TUNE_GLOBAL_CHECKPOINT_S` says now. Both campaigns had started under period 0 and kept it through
-every resume: their drivers saved the state and copied the result files every half second, 7-8%
-of a core each.
+`TUNE_GLOBAL_CHECKPOINT_S` says now: a run started under period 0 would save its state and copy
+its result files every half second through every resume, a few percent of a core.
 """
 
 from __future__ import annotations

@@ -17,22 +17,26 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..game.constants import BOMB_LIFE_AT_LAYING, START_POSITIONS
+from ..game.constants import BOARD_SIZE, BOMB_LIFE_AT_LAYING, START_POSITIONS
 
 FRESH_BOMB_LIFE = BOMB_LIFE_AT_LAYING - 1
 GAMES_PER_OPPONENT = 50
+
+
+def _board_counts() -> np.ndarray:
+    return np.zeros((BOARD_SIZE, BOARD_SIZE), np.int64)
 
 
 @dataclass
 class Heatmaps:
     """Counts over the games of one opponent, in top-left coordinates."""
 
-    positions: np.ndarray = field(default_factory=lambda: np.zeros((11, 11), np.int64))
-    bombs: np.ndarray = field(default_factory=lambda: np.zeros((11, 11), np.int64))
+    positions: np.ndarray = field(default_factory=_board_counts)
+    bombs: np.ndarray = field(default_factory=_board_counts)
     games: int = 0
 
 
-def to_top_left(position, seat: int, size: int = 11) -> tuple[int, int]:
+def to_top_left(position, seat: int, size: int = BOARD_SIZE) -> tuple[int, int]:
     """A seat's (row, col) mirrored so that the seat's start maps to agent 0's start."""
     r, c = position
     start_r, start_c = START_POSITIONS[seat]

@@ -28,6 +28,8 @@ Rates = dict[str, dict[str, tuple[float, float, float]]]  # opponent -> variant 
 # Reward kind -> its axis' title; one axis each, so shaped and raw returns are never compared on
 # one scale ("" : a run that did not log its kind). The rewards themselves: envs/team.py.
 REWARD_AXES = {"shaped": "shaped reward (the paper's)", "raw": "raw reward (the engine's)",
+               "shaped_credit": "shaped reward, credited kills only (ours)",
+               "raw_kills": "raw reward + 0.5 a credited kill (ours)",
                "": "reward kind not logged"}
 
 
@@ -75,10 +77,14 @@ def _mark_phase(ax, episode: float, stage: str, colour: str, run: int) -> None:
 
 def plot_outcomes(curves: list[TrainingCurve], out: Path) -> Figure:
     """Beside Fig. 3: each run's training win rate (solid) and loss rate (dashed), the same
-    rolling means per phase; one scale for every run, whatever its reward."""
-    fig = Figure(figsize=(9, 4.2), layout="constrained")
-    ax = fig.subplots()
+    rolling means per phase; one scale for every run, whatever its reward. Below, where a run
+    logs them, the enemies its team killed per game (game/kills.py)."""
+    killing = [curve for curve in curves if np.isfinite(curve.kills).any()]
+    fig = Figure(figsize=(9, 4.2 + 3.0 * bool(killing)), layout="constrained")
+    ax, *kills_ax = fig.subplots(1 + bool(killing), 1, sharex=True, squeeze=False)[:, 0]
     for k, curve in enumerate(curves):
+        if kills_ax and curve in killing:
+            kills_ax[0].plot(curve.episodes, curve.kills, color=f"C{k % 10}", label=curve.name)
         colour = f"C{k % 10}"
         for n, (start, end, stage) in enumerate(phases(curve.stages)):
             part = slice(start, end)
@@ -90,7 +96,12 @@ def plot_outcomes(curves: list[TrainingCurve], out: Path) -> Figure:
     ax.set_ylim(0, 1)
     ax.set_ylabel(f"learner's team: {WINDOW:,}-episode\nmean of RLlib's {RLLIB_WINDOW}-episode "
                   f"rates")
-    ax.set_xlabel("training episodes (lifetime)")
+    if kills_ax:
+        kills_ax[0].set_ylabel("enemies killed per game\n(the same rolling means)")
+        kills_ax[0].set_ylim(0, 2)
+        kills_ax[0].grid(alpha=0.3)
+        kills_ax[0].legend(fontsize=8, loc="best")
+    (kills_ax or [ax])[0].set_xlabel("training episodes (lifetime)")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="best")
     fig.suptitle("Training win and loss rates per curriculum phase (beside Fig. 3)")

@@ -1,17 +1,17 @@
 """The model card of a PPO policy shipped from a run (`train --export`), redrawn with its results
 table by `report --card`.
 
-A shipped policy folder carries what its card is drawn from, so the card can be redrawn after the
-run has moved on or is gone:
+The card is drawn from what the job hands it, all read from the policy folder by
+`rl/history.exported_training`, so it can be redrawn after the run has moved on or is gone:
 
-- `source.json` (written by `rl/checkpoint_policy.export_policy`): the run, trial and checkpoint
-  it came from, the checkpoint's iteration, the curriculum (name, description, every stage), the
-  commit it was exported at and the commits that packed the run; optionally `chosen`, a person's
-  reason for shipping this checkpoint rather than the run's end (say, the last one before a
-  collapse), which the card states instead of "training goes on";
-- `history/<run>/progress.csv`: the run's summary rows up to that checkpoint (`viz/training.py`),
-  which give Fig. 3 and the stage table;
-- optionally `NOTES.md`: words of a person, kept as they are under "Notes".
+- the source (`source.json`, written by `rl/checkpoint_policy.export_policy`): the run, trial and
+  checkpoint it came from, the checkpoint's iteration, the curriculum (name, description, every
+  stage), the commit it was exported at and the commits that packed the run; optionally
+  `chosen`, a person's reason for shipping this checkpoint rather than the run's end (say, the
+  last one before a collapse), which the card states instead of "training goes on";
+- its training (`viz/training.Training`, from the run's summary rows up to that checkpoint),
+  which gives Fig. 3, the stage table and the totals;
+- optionally `NOTES.md` in the folder: words of a person, kept as they are under "Notes".
 
 Arena records (`evaluate --records`, e.g. `benchmarks/paper_table.py --team ppo`) add the paper's
 Table 3 layout and Fig. 4.
@@ -19,44 +19,13 @@ Table 3 layout and Fig. 4.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 from .report import fig3_section, tables_section
-from .training import find_trials, number, read_trial
+from .training import Training
 
 CARD_FILE = "MODEL_CARD.md"
-SOURCE_FILE = "source.json"
-TRAINING_DIR = "history"
 NOTES_FILE = "NOTES.md"
-SOURCE_KEYS = ("policy", "run", "checkpoint", "iteration", "curriculum", "exported_at_commit",
-               "run_commits")
-
-
-def read_source(policy_dir: Path) -> dict:
-    """The policy folder's `source.json`, with every key the card uses, or a ValueError naming
-    the file and what is wrong."""
-    path = Path(policy_dir) / SOURCE_FILE
-    try:
-        source = json.loads(path.read_text())
-    except (OSError, ValueError) as exc:
-        raise ValueError(f"{path}: not readable ({exc}); write it with `python -m "
-                         f"rllib_pommer.train --out RUN --export {policy_dir}`") from None
-    missing = [key for key in SOURCE_KEYS if not isinstance(source, dict) or key not in source]
-    if missing:
-        raise ValueError(f"{path}: missing {missing}")
-    return source
-
-
-def _last_row(policy_dir: Path) -> dict:
-    trials = find_trials(Path(policy_dir) / TRAINING_DIR)
-    if len(trials) != 1:
-        raise ValueError(f"{policy_dir / TRAINING_DIR}: expected the summary of one trial, "
-                         f"found {len(trials)}")
-    rows = read_trial(trials[0]).rows
-    if not rows:
-        raise ValueError(f"{trials[0]}: no training rows")
-    return rows[-1]
 
 
 def _schedule(curriculum: dict) -> str:
@@ -79,12 +48,11 @@ def _start_line(source: dict) -> list[str]:
             f"run's pi-frozen first stage)"]
 
 
-def _preface(policy_dir: Path, source: dict) -> list[str]:
-    row = _last_row(policy_dir)
+def _preface(source: dict, training: Training) -> list[str]:
     curriculum = source["curriculum"]
     total = sum(s["episodes"] for s in curriculum["stages"])
-    games = int(number(row.get("env_runners/num_episodes_lifetime")))
-    hours = number(row.get("time_total_s")) / 3600
+    games = sum(stage.episodes for stage in training.stages)
+    hours = sum(stage.seconds for stage in training.stages) / 3600
     finished = games >= total
     if finished:
         status = "the whole curriculum"
@@ -95,7 +63,7 @@ def _preface(policy_dir: Path, source: dict) -> list[str]:
         status = (f"**{games / total:.0%} of the curriculum: training goes on**, and this card "
                   f"and the weights are replaced as it does")
     commits = source["run_commits"]
-    steps = int(number(row.get("env_runners/num_env_steps_sampled_lifetime")))
+    steps = sum(stage.env_steps for stage in training.stages)
     title = curriculum["description"].rstrip(".")
     return [
         f"# Model card: `{source['policy']}` ({title})",
@@ -118,14 +86,14 @@ def _preface(policy_dir: Path, source: dict) -> list[str]:
     ]
 
 
-def write_model_card(policy_dir: Path, records: list[Path] = ()) -> Path:
-    """`policy_dir`/MODEL_CARD.md with Fig. 3 and the stage table from its training summary, the
-    results tables and Fig. 4 from `records` (none: a pointer to the command that plays them),
-    and NOTES.md; PNGs beside it."""
+def write_model_card(policy_dir: Path, source: dict, training: Training,
+                     records: list[Path] = ()) -> Path:
+    """`policy_dir`/MODEL_CARD.md with Fig. 3 and the stage table from `training`, the results
+    tables and Fig. 4 from `records` (none: a pointer to the command that plays them), and
+    NOTES.md; PNGs beside it."""
     policy_dir = Path(policy_dir)
-    source = read_source(policy_dir)
-    parts = _preface(policy_dir, source)
-    parts += list(fig3_section(find_trials(policy_dir / TRAINING_DIR), policy_dir, summaries=False))
+    parts = _preface(source, training)
+    parts += list(fig3_section(training, policy_dir))
     play = (f"`python benchmarks/paper_table.py --team {source['policy']} --games 1000 --out "
             f"RECORDS` (the paper's rows that name a policy we have; seed 0, seats balanced), "
             f"then `python -m rllib_pommer.report --card {policy_dir} RECORDS/*.jsonl`")

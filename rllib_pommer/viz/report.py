@@ -1,11 +1,11 @@
 """The report of `python -m rllib_pommer.report`: inputs classified by what they hold, then the
-paper's figures and tables drawn from them into one folder (report.md and PNGs)."""
+paper's figures and tables drawn from them into one folder (report.md and PNGs). Runs come as
+their training figures, computed by the job with `rl/history.py` (viz/ reads no run history)."""
 
 from __future__ import annotations
 
 import csv
 import re
-from collections import Counter
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -27,15 +27,7 @@ from .matches import ROW_KEYS, load_outcomes, rates_by_opponent
 from .paper import paper_table
 from .render import render_game
 from .tables import results_table, training_table
-from .training import (
-    RLLIB_WINDOW,
-    WINDOW,
-    find_trials,
-    read_trial,
-    stage_figures,
-    training_curve,
-    write_summary,
-)
+from .training import RLLIB_WINDOW, WINDOW, Training
 from .viewer import write_viewer
 
 UNSAFE_IN_NAMES = re.compile(r"[^\w.-]+")
@@ -43,14 +35,10 @@ SUMMARIES = "runs"  # below the report's folder: one small trial folder per run 
 
 
 def kind_of(path: Path) -> str:
-    """"ladder" (a ladder job's folder), "trials", "records" (arena rows) or "replays", from
-    what the path holds."""
+    """"ladder" (a ladder job's folder), "runs" (another directory: Tune trials in or below
+    it), "records" (arena rows) or "replays", from what the path holds."""
     if path.is_dir():
-        if (path / LADDER_FILE).is_file():
-            return "ladder"
-        if not find_trials(path):
-            raise ValueError(f"{path}: no Tune trial (progress.csv or result.json) in or below it")
-        return "trials"
+        return "ladder" if (path / LADDER_FILE).is_file() else "runs"
     if path.suffix == ".csv":
         with open(path, newline="") as f:
             first = dict.fromkeys(next(csv.reader(f), []))
@@ -64,10 +52,9 @@ def kind_of(path: Path) -> str:
 
 
 def classify(paths: list[Path]) -> dict[str, list[Path]]:
-    found: dict[str, list[Path]] = {"trials": [], "records": [], "replays": [], "ladder": []}
+    found: dict[str, list[Path]] = {"runs": [], "records": [], "replays": [], "ladder": []}
     for path in paths:
-        kind = kind_of(path)
-        found[kind] += find_trials(path) if kind == "trials" else [path]
+        found[kind_of(path)].append(path)
     return found
 
 
@@ -91,18 +78,13 @@ def tables_section(records: list[Path], out: Path) -> Iterator[str]:
             yield f"![Fig. 4 for {team}]({name})"
 
 
-def fig3_section(paths: list[Path], out: Path, summaries: bool = True) -> Iterator[str]:
-    """Fig. 3 and the stage table of the trials in `paths` (PNG into `out`); `summaries`: also
-    keep each trial's rows, small, in `out`/runs/<run> (a card's trials are kept already)."""
-    trials = [read_trial(path) for path in paths]
-    curves = [training_curve(trial) for trial in trials]
-    plot_training(curves, out / "fig3_training.png")
-    plot_outcomes(curves, out / "fig3_outcomes.png")
-    named = Counter(trial.name for trial in trials)
-    for k, trial in enumerate(trials if summaries else ()):  # the figure's data
-        write_summary(trial, out / SUMMARIES / (
-            trial.name if named[trial.name] == 1 else f"{trial.name}_{k}"))
+def fig3_section(training: Training, out: Path, summaries: str = "") -> Iterator[str]:
+    """Fig. 3 and the stage table of `training` (PNGs into `out`); `summaries`: the folder below
+    `out` where the job kept each trial's rows, small (a card's trials are kept already)."""
+    plot_training(training.curves, out / "fig3_training.png")
+    plot_outcomes(training.curves, out / "fig3_outcomes.png")
     yield "## Training reward (the paper's Fig. 3)"
+    paths = training.trials
     shown = [path.relative_to(out) if path.is_relative_to(out) else path for path in paths]
     yield f"From {len(paths)} trial(s): " + ", ".join(f"`{path}`" for path in shown)
     yield "![Fig. 3](fig3_training.png)"
@@ -113,9 +95,9 @@ def fig3_section(paths: list[Path], out: Path, summaries: bool = True) -> Iterat
     yield "![training win and loss rates](fig3_outcomes.png)"
     yield ("The same means of the learner's team's win and loss rates: one scale for every "
            "run, whatever reward it was paid.")
-    yield training_table([f for trial in trials for f in stage_figures(trial)])
+    yield training_table(training.stages)
     if summaries:
-        yield (f"Each run's curve and training figures per iteration are in `{SUMMARIES}/<run>/"
+        yield (f"Each run's curve and training figures per iteration are in `{summaries}/<run>/"
                f"progress.csv` (a trial folder this report reads again).")
 
 
@@ -134,18 +116,17 @@ def _fig5_and_game(replays: list[Path], out: Path) -> Iterator[str]:
     yield "![the last step of a game](game.png)"
 
 
-def write_report(paths: list[Path], out: Path) -> Path:
-    """Classify the inputs, draw what they allow and write `out`/report.md."""
-    found = classify(paths)
+def write_report(out: Path, found: dict[str, list[Path]], training: Training | None) -> Path:
+    """Draw what the inputs allow (`found`: the inputs by `classify`; `training`: the figures of
+    its runs, whose trials the job summarised in `out`/`SUMMARIES`) and write `out`/report.md."""
     out.mkdir(parents=True, exist_ok=True)
     parts = ["# Report: our runs in the paper's figures and tables"]
-    makers = {"records": tables_section, "ladder": ladder_section, "trials": fig3_section,
-              "replays": _fig5_and_game}
-    for kind, maker in makers.items():
-        if found[kind]:
-            parts += list(maker(found[kind], out))
-        else:
-            parts.append(f"_No {kind} among the inputs._")
+    sections = (("records", found["records"], tables_section),
+                ("ladder", found["ladder"], ladder_section),
+                ("trials", training, lambda given, out: fig3_section(given, out, SUMMARIES)),
+                ("replays", found["replays"], _fig5_and_game))
+    for kind, given, section in sections:
+        parts += list(section(given, out)) if given else [f"_No {kind} among the inputs._"]
     report = out / "report.md"
     report.write_text("\n\n".join(parts) + "\n")
     return report

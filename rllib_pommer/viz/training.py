@@ -1,77 +1,21 @@
-"""Training curves from Tune trial directories, for the paper's Fig. 3.
+"""What the training figures draw (Fig. 3, the stage table, a model card's training): plain data
+that `rl/history.py` computes from a run's history, so viz/ draws runs without reading their
+files.
 
-A trial directory holds `result.json` (one JSON result per line, flattened with "/" as Tune
-does; read first) or `progress.csv`, one row per training iteration, and, in a run packed to be
-carried to another machine (`rl.packing.pack_run`), `history.csv`: the summary rows of the
-iterations before the pack, read before the others. result.json comes first
-because Tune's CSV appends a resumed run's rows in the new results' column order under the old
-header when the set of keys changed, which scrambles the columns. A resumed trial repeats the
-iterations after its checkpoint: the rows of the restored run replace the ones it discarded. Its
-clock, `time_total_s`, restarts at 0 when Tune restored it from a checkpoint registered without
-its result (a pack repeated after the result.json line was cut, `rl.packing`), so the rows are
-given one clock that adds up each iteration's own seconds (`with_continuous_clock`). A
-line that is not JSON (a write cut short: a live run mid-line, or a run killed mid-write and then
-resumed) is skipped with a warning naming the file and line. Columns used:
-
-- the mean episode return: the first present of `RETURN_COLUMNS` (required);
-- the episode count: `env_runners/num_episodes_lifetime` (cumulative) or, failing that,
-  `env_runners/num_episodes` (per iteration) (one of them required);
-- the curriculum phase: `curriculum/iteration_stage_name` (what `python -m rllib_pommer.train`
-  logs: the stage the iteration played in), `curriculum/stage_name` (older runs: the stage in
-  force after it, so the iteration that ends a stage counts in the next), `curriculum_stage` or
-  `curriculum_kind` (optional; without it the run is one phase);
-- the kind of return, `shaped` or `raw`: `curriculum/iteration_reward` (logged since the report
-  drew one axis per kind); in older rows, the env's reward in the trial's `params.json` (the
-  first stage's, right for every shipped curriculum, whose stages share one reward); else unknown.
-
-Rows without a return (empty or NaN: no episode finished yet) are skipped. A row's return is what
-RLlib logs: the mean over the last `RLLIB_WINDOW` episodes (its default smoothing window), not
-over the iteration's own episodes. The curve weights each row by the episodes its iteration
-finished and averages the last `WINDOW` episodes' worth, restarted at each phase change so a
-phase's curve never mixes opponents: a mean of 100-episode means spanning about 1,100 episodes.
-
-`write_summary` keeps a trial's curve columns and `SUMMARY_COLUMNS` in a small progress.csv (a
-few hundred bytes per iteration instead of a result.json's ~25 KB), itself a trial directory this
-module reads: the report writes one per run beside Fig. 3, so the figure and the figures quoted
-from a run can be redrawn after the run directory is gone.
+A curve's point is the mean return over the last `WINDOW` episodes up to an iteration, restarted
+at each curriculum phase; each iteration logs RLlib's mean over its last `RLLIB_WINDOW` episodes
+(its default smoothing window, which our config leaves as is).
 """
 
 from __future__ import annotations
 
-import csv
-import json
-import math
-import os
-import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-RETURN_COLUMNS = ("env_runners/module_episode_returns_mean/learner",
-                  "env_runners/episode_return_mean", "episode_reward_mean")
-LIFETIME_COLUMNS = ("env_runners/num_episodes_lifetime", "num_episodes_lifetime")
-PER_ITERATION_COLUMNS = ("env_runners/num_episodes", "episodes_this_iter")
-STAGE_COLUMNS = ("curriculum/iteration_stage_name", "curriculum/stage_name", "curriculum_stage",
-                 "curriculum_kind")
-REWARD_COLUMN = "curriculum/iteration_reward"
-HISTORY_FILE = "history.csv"
-TRIAL_FILES = ("result.json", "progress.csv", HISTORY_FILE)
-# Kept by `write_summary` beside the columns the curve is drawn from (what our trainer logs).
-SUMMARY_COLUMNS = (
-    "training_iteration", "time_total_s", "env_runners/num_env_steps_sampled_lifetime",
-    "curriculum/pi_frozen", "env_runners/learner_win", "env_runners/learner_loss",
-    "env_runners/learner_tie", "env_runners/learner_override_share",
-    "env_runners/learner_kills", "env_runners/learner_suicides",
-    "env_runners/learner_opponent_suicides", "env_runners/learner_bombs",
-    "env_runners/episode_len_mean", "learners/learner/vf_explained_var",
-    "learners/learner/pi_logit_spread", "learners/learner/nonfinite_updates_skipped",
-    "learners/learner/pi_log_ratio_max", "learners/learner/pi_log_ratio_min",
-    "learners/learner/pi_rare_rows", "learners/learner/pi_rare_log_ratio_max",
-    "learners/learner/pi_rare_log_ratio_min", "learners/learner/pi_dual_clipped_rows",
-    "time_this_iter_s")
 WINDOW = 1000
-RLLIB_WINDOW = 100  # RLlib's metrics_num_episodes_for_smoothing, which our config leaves as is
+RLLIB_WINDOW = 100
 
 
 @dataclass
@@ -85,226 +29,12 @@ class TrainingCurve:
     rewards: list[str]  # per row: "shaped", "raw" or "" (not known)
     wins: np.ndarray  # the learner's team's win rate, the same rolling mean (NaN: not logged)
     losses: np.ndarray
+    kills: np.ndarray | None = None  # enemies its team killed per game, the same mean (NaN: not
+    # logged; None: all NaN)
 
-
-def run_name(trial: Path) -> str:
-    """A trial's label: its run directory's name (`runs/quick` -> "quick") when Tune named the
-    trial itself (PPO_<env>_<id>...), else the trial directory's own name."""
-    return trial.parent.name if trial.name.startswith("PPO_") else trial.name
-
-
-def is_trial(path: Path) -> bool:
-    return path.is_dir() and any((path / name).is_file() for name in TRIAL_FILES)
-
-
-def find_trials(path: Path) -> list[Path]:
-    """`path` if it is a trial directory, else the trial directories below it."""
-    if is_trial(path):
-        return [path]
-    return sorted({p.parent for name in TRIAL_FILES for p in path.rglob(name)})
-
-
-def _flatten(result: dict, prefix: str = "") -> dict:
-    flat = {}
-    for key, value in result.items():
-        if isinstance(value, dict):
-            flat.update(_flatten(value, f"{prefix}{key}/"))
-        else:
-            flat[prefix + key] = value
-    return flat
-
-
-def _json_rows(path: Path) -> list[dict]:
-    rows, unreadable = [], []
-    with open(path) as f:
-        for number, line in enumerate(f, start=1):
-            if not line.strip():
-                continue
-            try:
-                rows.append(_flatten(json.loads(line)))
-            except json.JSONDecodeError:
-                unreadable.append(number)
-    if unreadable:
-        warnings.warn(f"{path}: skipped line(s) {unreadable}, not JSON (a write cut short)",
-                      stacklevel=3)
-    return rows
-
-
-def _csv_rows(path: Path) -> list[dict]:
-    with open(path, newline="") as f:
-        return list(csv.DictReader(f))
-
-
-def read_rows(trial: Path) -> list[dict]:
-    rows = _csv_rows(trial / HISTORY_FILE) if (trial / HISTORY_FILE).is_file() else []
-    if (trial / "result.json").is_file():
-        rows += _json_rows(trial / "result.json")
-    elif (trial / "progress.csv").is_file():
-        rows += _csv_rows(trial / "progress.csv")
-    started_with = _started_reward(trial)
-    return [row if row.get(REWARD_COLUMN) or not started_with
-            else {**row, REWARD_COLUMN: started_with}
-            for row in with_continuous_clock(without_discarded(rows))]
-
-
-def _started_reward(trial: Path) -> str:
-    """The env's reward mode the trial started with, from Tune's params.json ("" if unknown)."""
-    try:
-        params = json.loads((trial / "params.json").read_text())
-    except (OSError, ValueError):
-        return ""
-    reward = params.get("env_config", {}).get("reward") if isinstance(params, dict) else None
-    return reward if isinstance(reward, str) else ""
-
-
-@dataclass
-class Trial:
-    """A trial directory and its rows, read once (a long run's result.json is large)."""
-
-    path: Path
-    rows: list[dict]
-
-    @property
-    def name(self) -> str:
-        return run_name(self.path)
-
-
-def read_trial(trial: Trial | Path) -> Trial:
-    return trial if isinstance(trial, Trial) else Trial(Path(trial), read_rows(Path(trial)))
-
-
-def write_summary(trial: Trial | Path, out: Path, name: str = "progress.csv") -> Path:
-    """`out`/`name`: the trial's rows (restores resolved), only the columns the curve is drawn
-    from and those of `SUMMARY_COLUMNS` it has; written whole or not at all (it may replace the
-    file the rows were read from)."""
-    rows = read_trial(trial).rows
-    curve = [_column(rows, names) for names in (RETURN_COLUMNS, LIFETIME_COLUMNS,
-                                                PER_ITERATION_COLUMNS)]
-    columns = list(dict.fromkeys(c for c in [*SUMMARY_COLUMNS, *curve, *STAGE_COLUMNS,
-                                             REWARD_COLUMN]
-                                 if c and any(c in row for row in rows)))
-    out.mkdir(parents=True, exist_ok=True)
-    partial = out / f".{name}.tmp"
-    with open(partial, "w", newline="") as f:
-        writer = csv.DictWriter(f, columns, extrasaction="ignore")
-        writer.writeheader()
-        writer.writerows(rows)
-    os.replace(partial, out / name)
-    return out
-
-
-def without_discarded(rows: list[dict]) -> list[dict]:
-    """The rows in training order after restores: an iteration number that does not grow starts
-    a restored run, whose rows replace those from that iteration on."""
-    kept: list[dict] = []
-    last = -math.inf
-    for row in rows:
-        iteration = number(row.get("training_iteration"))
-        if iteration <= last:
-            kept = [k for k in kept if not number(k.get("training_iteration")) >= iteration]
-        last = iteration if math.isfinite(iteration) else last
-        kept.append(row)
-    return kept
-
-
-def with_continuous_clock(rows: list[dict]) -> list[dict]:
-    """The rows (in training order, restores resolved) with one clock (module docstring): the
-    first row's `time_total_s`, then each row adds its own seconds, `time_this_iter_s` where
-    logged, else the growth of `time_total_s` since the row before, or all of it where it ran back
-    (a restore that restarted it at 0). A row's total alone cannot say: a restarted clock may
-    have run for hours before a pack put its rows after the ones it had restarted under."""
-    carried, clock, last = [], math.nan, math.nan
-    for row in rows:
-        total = number(row.get("time_total_s"))
-        if not math.isfinite(total):
-            carried.append(row)
-            continue
-        own = number(row.get("time_this_iter_s"))
-        if not math.isfinite(own):
-            own = total - last if total >= last else total
-        clock = total if math.isnan(clock) else clock + own
-        last = total
-        carried.append(row if clock == total else {**row, "time_total_s": clock})
-    return carried
-
-
-def number(value) -> float:
-    """A cell as a float; NaN where it is empty or not a number."""
-    try:
-        return float(value)
-    except (TypeError, ValueError):
-        return math.nan
-
-
-def _column(rows: list[dict], names: tuple[str, ...]) -> str | None:
-    return next((n for n in names if any(n in row for row in rows)), None)
-
-
-def rolling_mean(means: np.ndarray, counts: np.ndarray, window: int = WINDOW) -> np.ndarray:
-    """Per row, the mean return of the last `window` episodes up to it (NaN before any)."""
-    per_episode = np.repeat(means, counts)
-    total = np.concatenate([[0.0], np.cumsum(per_episode)])
-    ends = np.cumsum(counts)
-    starts = np.maximum(ends - window, 0)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return (total[ends] - total[starts]) / (ends - starts)
-
-
-def _values(rows: list[dict], column: str | None) -> np.ndarray:
-    return np.array([number(row.get(column)) for row in rows]) if column else \
-        np.full(len(rows), np.nan)
-
-
-def _increments(rows: list[dict], column: str) -> np.ndarray:
-    """Per row, the growth of a lifetime counter since the row before."""
-    return np.diff(np.maximum.accumulate(np.nan_to_num(_values(rows, column))), prepend=0)
-
-
-def _episode_counts(trial: Trial) -> np.ndarray:
-    """Episodes finished in each row's iteration."""
-    rows = trial.rows
-    lifetime_col = _column(rows, LIFETIME_COLUMNS)
-    if lifetime_col:
-        return _increments(rows, lifetime_col)
-    per_iter_col = _column(rows, PER_ITERATION_COLUMNS)
-    if per_iter_col is None:
-        raise ValueError(f"{trial.path}: needs an episode count ({LIFETIME_COLUMNS[0]} or "
-                         f"{PER_ITERATION_COLUMNS[0]})")
-    return np.nan_to_num(_values(rows, per_iter_col))
-
-
-def training_curve(trial: Trial | Path, window: int = WINDOW) -> TrainingCurve:
-    trial = read_trial(trial)
-    rows = trial.rows
-    returns_col = _column(rows, RETURN_COLUMNS)
-    if returns_col is None:
-        raise ValueError(f"{trial.path}: needs a return column (one of {list(RETURN_COLUMNS)})")
-    means = _values(rows, returns_col)
-    counts = _episode_counts(trial)
-    known = np.isfinite(means)
-    episodes = np.cumsum(counts)[known]
-    counts = counts[known].astype(np.int64)
-    kept = [row for row, k in zip(rows, known, strict=True) if k]
-    stages = [_stage_of(row) for row in kept]
-
-    def curve(values: np.ndarray) -> np.ndarray:
-        return _phase_means(values, counts, stages, window)
-
-    return TrainingCurve(trial.name, episodes, curve(means[known]), stages,
-                         [str(row.get(REWARD_COLUMN) or "") for row in kept],
-                         curve(_values(kept, "env_runners/learner_win")),
-                         curve(_values(kept, "env_runners/learner_loss")))
-
-
-def _phase_means(values: np.ndarray, counts: np.ndarray, stages: list[str],
-                 window: int) -> np.ndarray:
-    """`rolling_mean` restarted at each phase; a row without a value weighs nothing."""
-    known = np.isfinite(values)
-    values, counts = np.where(known, values, 0.0), np.where(known, counts, 0)
-    means = np.full(len(values), np.nan)
-    for start, end, _ in phases(stages):
-        means[start:end] = rolling_mean(values[start:end], counts[start:end], window)
-    return means
+    def __post_init__(self):
+        if self.kills is None:
+            self.kills = np.full(len(self.episodes), np.nan)
 
 
 @dataclass
@@ -326,41 +56,14 @@ class StageFigures:
     explained_variance: tuple[float, float]
 
 
-def _weighted_mean(values: np.ndarray, weights: np.ndarray) -> float:
-    known = np.isfinite(values) & (weights > 0)
-    return float(np.average(values[known], weights=weights[known])) if known.any() else math.nan
+@dataclass
+class Training:
+    """The training of some trials, as the figures draw it: the trial folders it was read from,
+    one curve per trial and the figures of every phase of every trial."""
 
-
-def _mean(values: np.ndarray) -> float:
-    known = values[np.isfinite(values)]
-    return float(known.mean()) if known.size else math.nan
-
-
-def stage_figures(trial: Trial | Path) -> list[StageFigures]:
-    trial = read_trial(trial)
-    rows = trial.rows
-    counts = _episode_counts(trial)
-    steps = _increments(rows, "env_runners/num_env_steps_sampled_lifetime")
-    seconds = _increments(rows, "time_total_s")
-    runner = {name: _values(rows, f"env_runners/learner_{name}")
-              for name in ("win", "loss", "tie", "override_share")}
-    variance = _values(rows, "learners/learner/vf_explained_var")
-    figures = []
-    for start, end, stage in phases([_stage_of(row) for row in rows]):
-        part = slice(start, end)
-        rates = {name: _weighted_mean(values[part], counts[part])
-                 for name, values in runner.items()}
-        figures.append(StageFigures(
-            trial.name, stage, end - start, int(counts[part].sum()),
-            int(steps[part].sum()), float(seconds[part].sum()), **rates,
-            explained_variance=(_mean(variance[part][:10]), _mean(variance[part][-10:]))))
-    return figures
-
-
-def _stage_of(row: dict) -> str:
-    """The row's phase from the first of `STAGE_COLUMNS` it has (a run resumed by a newer version
-    has the newer column from then on only)."""
-    return next((str(row[c]) for c in STAGE_COLUMNS if row.get(c) not in (None, "")), "")
+    trials: list[Path]
+    curves: list[TrainingCurve]
+    stages: list[StageFigures]
 
 
 def phases(stages: list[str]) -> list[tuple[int, int, str]]:

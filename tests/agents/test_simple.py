@@ -6,12 +6,11 @@ import numpy as np
 import pytest
 
 from rllib_pommer.agents.simple import SimpleAgent, SimpleMemory, new_memory, simple_actions
-from rllib_pommer.game.constants import Action, GameType, Item
+from rllib_pommer.game.constants import BOARD_SIZE, Action, GameType, Item
 from rllib_pommer.game.observation import Observation
 
 STOP, UP, DOWN, LEFT, RIGHT, BOMB = (int(a) for a in Action)
 ME = (5, 5)
-SIZE = 11
 
 
 def make_obs(
@@ -23,9 +22,9 @@ def make_obs(
     blast_strength: int = 2,
 ) -> Observation:
     """A board filled with `fill` holding only this agent; callers place walls, bombs, others."""
-    board = np.full((SIZE, SIZE), fill, np.uint8)
+    board = np.full((BOARD_SIZE, BOARD_SIZE), fill, np.uint8)
     board[position] = Item.AGENT0 + agent_id
-    zeros = np.zeros((SIZE, SIZE), np.uint8)
+    zeros = np.zeros((BOARD_SIZE, BOARD_SIZE), np.uint8)
     return Observation(
         board=board,
         bomb_blast_strength=zeros.copy(),
@@ -128,16 +127,16 @@ def test_wander_never_picks_a_wall_and_uses_every_open_direction():
 def random_observations(rng: np.random.Generator, m: int) -> Observation:
     """`m` observations with random boards of valid codes, bombs, fog and own stats."""
     codes = np.array([0, 0, 0, 0, 1, 2, 3, 4, 5, 6, 7, 8, 10, 11, 12, 13], np.uint8)
-    board = rng.choice(codes, size=(m, SIZE, SIZE))
+    board = rng.choice(codes, size=(m, BOARD_SIZE, BOARD_SIZE))
     bomb_blast_strength = np.where(
-        (board == Item.BOMB) | (rng.random((m, SIZE, SIZE)) < 0.05),
-        rng.integers(1, 11, (m, SIZE, SIZE)),
+        (board == Item.BOMB) | (rng.random((m, BOARD_SIZE, BOARD_SIZE)) < 0.05),
+        rng.integers(1, 11, (m, BOARD_SIZE, BOARD_SIZE)),
         0,
     ).astype(np.uint8)
-    position = rng.integers(0, SIZE, (m, 2)).astype(np.int32)
+    position = rng.integers(0, BOARD_SIZE, (m, 2)).astype(np.int32)
     agent_id = rng.integers(0, 4, m).astype(np.int32)
     board[np.arange(m), position[:, 0], position[:, 1]] = Item.AGENT0 + agent_id
-    zeros = np.zeros((m, SIZE, SIZE), np.uint8)
+    zeros = np.zeros((m, BOARD_SIZE, BOARD_SIZE), np.uint8)
     return Observation(
         board=board,
         bomb_blast_strength=bomb_blast_strength,

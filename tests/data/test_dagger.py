@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import hashlib
-
 import numpy as np
 import pytest
 import torch
@@ -56,7 +54,7 @@ def test_only_the_clone_is_recorded_and_the_clone_moves_the_game(tmp_path):
 
 def test_same_seed_same_data_and_a_changed_clone_is_refused(tmp_path):
     policy = _policy(tmp_path)
-    dagger = Dagger(policy, ("simple", "static"))
+    dagger = Dagger(policy, ("simple", "static"), greedy_actor)
     Collection(tmp_path / "a", 4, 5, 2, DRAWS, dagger).run(workers=1)
     assert collect_main(["--games", "4", "--out", str(tmp_path / "b"), "--seed", "5",
                          "--shard-games", "2", "--workers", "1", "--label-draws", str(DRAWS),
@@ -74,11 +72,11 @@ def test_same_seed_same_data_and_a_changed_clone_is_refused(tmp_path):
 def test_dagger_needs_label_draws_and_known_opponents(tmp_path):
     policy = _policy(tmp_path)
     with pytest.raises(ValueError, match="label-draws"):
-        Collection(tmp_path / "x", 4, 5, 2, 0, Dagger(policy, ("simple",)))
+        Collection(tmp_path / "x", 4, 5, 2, 0, Dagger(policy, ("simple",), greedy_actor))
     with pytest.raises(ValueError, match="opponents.*random"):
-        Collection(tmp_path / "y", 4, 5, 2, DRAWS, Dagger(policy, ("random",)))
+        Collection(tmp_path / "y", 4, 5, 2, DRAWS, Dagger(policy, ("random",), greedy_actor))
     with pytest.raises(ValueError, match="not a plain learned policy"):
-        Collection(tmp_path / "z", 4, 5, 2, DRAWS, Dagger("simple", ("static",)))
+        Collection(tmp_path / "z", 4, 5, 2, DRAWS, Dagger("simple", ("static",), greedy_actor))
 
 
 def _ppo_run(tmp_path) -> tuple:
@@ -105,18 +103,3 @@ def test_dagger_data_from_a_ppo_run_folder(tmp_path):
                          "--vs", "static"]) == 0
     batch = next(open_dataset(tmp_path / "d").iter_batches(10**6))
     assert len(batch.action) > 0  # labels of the states the bomber visited
-
-
-def test_a_relative_checkpoint_is_found_from_the_policy_file(tmp_path, monkeypatch):
-    """`checkpoint` relative to the policy file, as the registry plays it, from any directory
-    (it resolved against the working directory: FileNotFoundError from another folder)."""
-    run, trial = _ppo_run(tmp_path)
-    policy = tmp_path / "policies" / "ppo_run.toml"
-    policy.parent.mkdir()
-    policy.write_text('kind = "rllib_checkpoint"\ncheckpoint = "../run"\n')
-    elsewhere = tmp_path / "elsewhere"
-    elsewhere.mkdir()
-    monkeypatch.chdir(elsewhere)
-    collection = Collection(tmp_path / "d", 2, 0, 2, DRAWS, Dagger(str(policy), ("static",)))
-    assert collection.plan.template.policy_sha256 == hashlib.sha256(
-        (trial / "checkpoint_000002" / MODULE_STATE).read_bytes()).hexdigest()

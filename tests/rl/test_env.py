@@ -1,5 +1,5 @@
 """The env's API (RLlib's multi-agent check), seeding, deaths and rewards; the PettingZoo env
-plays the same episodes (PettingZoo's own tests: tests/test_envs.py)."""
+plays the same episodes (PettingZoo's own tests: tests/envs/test_envs.py)."""
 
 from __future__ import annotations
 

@@ -5,6 +5,7 @@ card drawn from the run up to the exported checkpoint; `report --card` redraws i
 from __future__ import annotations
 
 import csv
+import hashlib
 import json
 import pickle
 import re
@@ -18,6 +19,10 @@ import pytest
 import torch
 
 from rllib_pommer.arena.match import MatchSpec, play_match
+from rllib_pommer.data.collector import Collection, Dagger
+from rllib_pommer.game.constants import NUM_AGENTS
+from rllib_pommer.game.engine import Games
+from rllib_pommer.imitation.learned import greedy_actor
 from rllib_pommer.imitation.network import PommerNet
 from rllib_pommer.report import main as report
 from rllib_pommer.rl.checkpoint_policy import (
@@ -29,9 +34,8 @@ from rllib_pommer.rl.checkpoint_policy import (
     load_checkpoint_net,
     packed_commits,
 )
+from rllib_pommer.rl.history import HISTORY_FILE, POLICY_HISTORY_DIR, read_trial
 from rllib_pommer.train import main
-from rllib_pommer.viz.model_card import TRAINING_DIR
-from rllib_pommer.viz.training import HISTORY_FILE, read_trial
 
 REPO = Path(__file__).resolve().parents[2]
 COLUMNS = ("training_iteration", "time_total_s", "env_runners/num_env_steps_sampled_lifetime",
@@ -216,7 +220,7 @@ def test_the_committed_campaign_exports_to_its_checkpoint(tmp_path, committed_ca
     assert re.search(rf"{games:,} of 100,000 games", card)
     assert f"iteration {iteration:,}" in card
     assert "pi started from `imitation_v2`" in card  # the soft-target clone, before DAgger
-    kept = read_trial(target / TRAINING_DIR / "paper").rows
+    kept = read_trial(target / POLICY_HISTORY_DIR / "paper").rows
     assert int(float(kept[-1]["training_iteration"])) == iteration
     net = load_checkpoint_net(checkpoint)
     weights = torch.load(target / "pi.pt", weights_only=True)
@@ -296,3 +300,24 @@ def test_an_export_target_that_cannot_be_written_is_one_line(tmp_path, capsys, t
     assert main(["--out", str(tmp_path / "run"), "--export", str(target(tmp_path))]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith(f"error: {message.format(t=tmp_path)}"), err
+
+
+def test_a_run_is_dagger_s_clone_from_any_working_directory(tmp_path, monkeypatch):
+    """Both learned kinds resolve their paths one way, against the policy file: a checkpoint
+    policy's relative `checkpoint` works from another working directory, and DAgger's actor
+    names the module state it read (its weights' fingerprint), not the run folder."""
+    torch.manual_seed(4)
+    trial = _fake_run(tmp_path / "run", PommerNet())
+    policy = tmp_path / "ppo_run.toml"
+    policy.write_text('kind = "rllib_checkpoint"\ncheckpoint = "run"\ngreedy = true\n')
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    for name in (str(policy), str(tmp_path / "run")):
+        act, source = greedy_actor(name)
+        assert source == (trial / "checkpoint_000002" / MODULE_STATE).resolve()
+        obs = Games(1).reset([0]).agent_rows()
+        assert act(obs).shape == (NUM_AGENTS,)
+    planned = Collection(tmp_path / "dagger", 2, 0, 2, 4, Dagger(str(policy), ("static",),
+                                                                 greedy_actor)).plan[0]
+    assert planned.policy_sha256 == hashlib.sha256(source.read_bytes()).hexdigest()

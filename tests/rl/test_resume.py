@@ -24,8 +24,8 @@ from rllib_pommer.rl.checkpoint_policy import (
     checkpoint_iteration,
     load_checkpoint_net,
 )
+from rllib_pommer.rl.history import read_rows
 from rllib_pommer.rl.training import SNAPSHOT_PERIOD_S
-from rllib_pommer.viz.training import read_rows
 
 REPO = Path(__file__).resolve().parents[2]
 

@@ -1,4 +1,5 @@
-"""What the figures are drawn from: training curves, match names and results, heatmaps."""
+"""What the figures are drawn from: match names and results, heatmaps, the paper's tables; how
+Figs. 3 and 5 draw it."""
 
 from __future__ import annotations
 
@@ -12,68 +13,9 @@ from rllib_pommer.viz.behaviour import Heatmaps, heatmaps_by_opponent, to_top_le
 from rllib_pommer.viz.figures import FIG5_MARKS, plot_behaviour, plot_outcomes, plot_training
 from rllib_pommer.viz.matches import Match, load_outcomes, match_of
 from rllib_pommer.viz.paper import PAPER_OPPONENTS, PAPER_TABLES, paper_table
-from rllib_pommer.viz.tables import training_table
-from rllib_pommer.viz.training import (
-    TrainingCurve,
-    read_rows,
-    rolling_mean,
-    stage_figures,
-    training_curve,
-    write_summary,
-)
+from rllib_pommer.viz.training import TrainingCurve
 
 from ..conftest import PAPER_TABLES as PAPER_TEX
-
-
-def test_rolling_mean_weights_rows_by_their_episodes():
-    means, counts = np.array([0.0, 0.0, 1.0]), np.array([500, 500, 500])
-    np.testing.assert_allclose(rolling_mean(means, counts, window=1000), [0, 0, 0.5])
-    np.testing.assert_allclose(rolling_mean(np.array([2.0]), np.array([0])), [np.nan])
-
-
-def test_training_curve_from_progress_csv_restarts_at_each_phase(tmp_path):
-    trial = tmp_path / "PPO_pommer_00000"
-    trial.mkdir()
-    (trial / "progress.csv").write_text(
-        "training_iteration,env_runners/episode_return_mean,env_runners/num_episodes_lifetime,"
-        "curriculum_stage\n"
-        "1,,0,static\n"  # no episode finished yet: skipped
-        "2,-1.0,600,static\n3,0.0,1200,static\n4,1.0,1700,simple\n5,1.0,2200,simple\n")
-    curve = training_curve(trial)
-    np.testing.assert_array_equal(curve.episodes, [600, 1200, 1700, 2200])
-    np.testing.assert_allclose(curve.returns, [-1.0, -0.4, 1.0, 1.0])
-    assert curve.stages == ["static", "static", "simple", "simple"]
-
-
-def test_win_and_loss_curves_are_the_same_means_and_skip_rows_without_them(tmp_path):
-    """Weighted by episodes, restarted per phase; a row that logged no rate weighs nothing, a
-    phase without any is NaN; the figure draws both per run on one 0..1 axis."""
-    trial = tmp_path / "PPO_pommer_00000"
-    trial.mkdir()
-    (trial / "progress.csv").write_text(
-        "env_runners/episode_return_mean,env_runners/num_episodes_lifetime,curriculum_stage,"
-        "env_runners/learner_win,env_runners/learner_loss\n"
-        "0.0,500,static,0.2,0.6\n0.0,1000,static,,\n0.0,1500,static,0.6,0.2\n"
-        "0.0,2000,simple,,\n")
-    curve = training_curve(trial)
-    np.testing.assert_allclose(curve.wins, [0.2, 0.2, 0.4, np.nan])
-    np.testing.assert_allclose(curve.losses, [0.6, 0.6, 0.4, np.nan])
-    fig = plot_outcomes([curve], tmp_path / "outcomes.png")
-    (ax,) = fig.axes
-    assert ax.get_ylim() == (0, 1)
-    assert [t.get_text() for t in ax.get_legend().get_texts()] == [
-        f"{curve.name}: win", f"{curve.name}: loss"]
-
-
-def test_training_curve_from_nested_result_json_without_stages(tmp_path):
-    rows = [{"env_runners": {"episode_return_mean": r, "num_episodes": 10}} for r in (1, 3)]
-    (tmp_path / "result.json").write_text("".join(json.dumps(r) + "\n" for r in rows))
-    curve = training_curve(tmp_path)
-    np.testing.assert_allclose(curve.returns, [1.0, 2.0])
-    assert curve.stages == ["", ""]
-    (tmp_path / "result.json").write_text(json.dumps({"loss": 1.0}) + "\n")
-    with pytest.raises(ValueError, match="needs a return column"):
-        training_curve(tmp_path)
 
 
 def test_matches_are_named_by_sidecar_or_file_name(tmp_path):
@@ -139,162 +81,12 @@ def test_paper_numbers_are_the_tex_tables():
         assert rows == expected
 
 
-def test_a_restored_runs_rows_replace_the_discarded_ones(tmp_path):
-    def row(iteration, lifetime, ret):
-        return {"training_iteration": iteration, "curriculum": {"stage_name": "warmup"},
-                "env_runners": {"num_episodes_lifetime": lifetime, "episode_return_mean": ret}}
-
-    # Checkpoint after iteration 2; iterations 3-4 ran, were lost, and were run again.
-    rows = [row(1, 10, 0.0), row(2, 20, 0.0), row(3, 30, 9.0), row(4, 40, 9.0),
-            row(3, 30, 1.0), row(4, 40, 1.0)]
-    (tmp_path / "result.json").write_text("".join(json.dumps(r) + "\n" for r in rows))
-    # A CSV scrambled by the resume is not read when result.json is there.
-    (tmp_path / "progress.csv").write_text("training_iteration,x\n1,2\n3,garbage,more\n")
-    curve = training_curve(tmp_path, window=20)
-    np.testing.assert_array_equal(curve.episodes, [10, 20, 30, 40])
-    np.testing.assert_allclose(curve.returns, [0.0, 0.0, 0.5, 1.0])
-
-
-def test_a_clock_restarted_by_a_restore_is_carried_on(tmp_path):
-    """Tune restarts time_total_s at 0 when it restores a checkpoint registered without its
-    result; the iterations go on, so the rows count on from the time before the drop."""
-    def row(iteration, seconds):
-        return {"training_iteration": iteration, "time_total_s": seconds,
-                "curriculum": {"iteration_stage_name": "simple"},
-                "env_runners": {"num_episodes_lifetime": 10 * iteration,
-                                "episode_return_mean": 0.0}}
-
-    rows = [row(1, 5.0), row(2, 10.0), row(3, 4.0), row(4, 9.0), row(5, 3.0)]
-    (tmp_path / "result.json").write_text("".join(json.dumps(r) + "\n" for r in rows))
-    clock = [float(r["time_total_s"]) for r in read_rows(tmp_path)]
-    assert clock == [5.0, 10.0, 14.0, 19.0, 22.0]
-    (figures,) = stage_figures(tmp_path)
-    assert figures.seconds == 22.0
-
-
-def test_a_packed_clock_adds_each_iterations_own_seconds(tmp_path):
-    """A pack keeps result.json's lines from its checkpoint on beside history.csv: their clock
-    restarted long before (raw 20 s at iteration 3, where the history had carried it to 120 s),
-    so only each iteration's own seconds may be added to the history's clock."""
-    with open(tmp_path / "history.csv", "w") as f:
-        f.write("training_iteration,time_total_s,env_runners/num_episodes_lifetime,"
-                "env_runners/module_episode_returns_mean/learner\n"
-                "1,100.0,10,0.0\n2,110.0,20,0.0\n3,120.0,30,0.0\n")
-    results = [{"training_iteration": k, "time_total_s": raw, "time_this_iter_s": 10.0,
-                "env_runners": {"num_episodes_lifetime": 10 * k, "episode_return_mean": 0.0}}
-               for k, raw in ((3, 20.0), (4, 30.0))]
-    (tmp_path / "result.json").write_text("".join(json.dumps(r) + "\n" for r in results))
-    clock = [float(r["time_total_s"]) for r in read_rows(tmp_path)]
-    assert clock == [100.0, 110.0, 120.0, 130.0]
-
-
-def test_lines_cut_short_are_skipped_with_a_warning_naming_them(tmp_path):
-    def line(ret):
-        return json.dumps({"env_runners": {"episode_return_mean": ret, "num_episodes": 10}})
-
-    # A run killed mid-write and resumed leaves a torn line 2; a live run is mid-way on line 4.
-    (tmp_path / "result.json").write_text(
-        line(1) + "\n" + line(9)[:25] + line(3) + "\n" + line(5) + "\n" + line(7)[:30])
-    with pytest.warns(UserWarning, match=r"result.json: skipped line\(s\) \[2, 4\]"):
-        curve = training_curve(tmp_path)
-    np.testing.assert_allclose(curve.returns, [1.0, 3.0])
-
-
-def test_a_summary_keeps_the_curve_and_the_training_figures_only(tmp_path):
-    def row(iteration, ret, win):
-        return {"training_iteration": iteration, "curriculum": {"stage_name": "warmup"},
-                "env_runners": {"num_episodes_lifetime": 10 * iteration,
-                                "module_episode_returns_mean": {"learner": ret},
-                                "learner_win": win, "timers": {"sample": 1.5}},
-                "config": {"lr": 1e-4}}
-
-    rows = [row(1, -1.0, 0.0), row(2, 0.5, 0.25), row(1, 0.0, 0.5), row(2, 1.0, 1.0)]
-    trial = tmp_path / "PPO_pommerman_team_00000"
-    trial.mkdir()
-    (trial / "result.json").write_text("".join(json.dumps(r) + "\n" for r in rows))
-    summary = write_summary(trial, tmp_path / "summary" / "quick")
-    header, *lines = (summary / "progress.csv").read_text().splitlines()
-    assert header.split(",") == [
-        "training_iteration", "env_runners/learner_win",
-        "env_runners/module_episode_returns_mean/learner", "env_runners/num_episodes_lifetime",
-        "curriculum/stage_name"]
-    assert len(lines) == 2  # the restored run's rows replaced the discarded ones
-    again, first = training_curve(summary, window=20), training_curve(trial, window=20)
-    np.testing.assert_allclose(again.returns, first.returns)
-    np.testing.assert_array_equal(again.episodes, first.episodes)
-    assert again.stages == first.stages == ["warmup", "warmup"]
-    assert again.name == "quick"
-
-
-def test_an_iteration_counts_in_the_stage_it_played_also_across_versions(tmp_path):
-    def row(iteration, **curriculum):
-        return {"training_iteration": iteration, "curriculum": curriculum,
-                "env_runners": {"num_episodes_lifetime": 10 * iteration,
-                                "episode_return_mean": 0.0}}
-
-    # An older version logged only the stage in force after the iteration; a newer one resumed
-    # the run after iteration 2 and logs the stage each iteration played in.
-    rows = [row(1, stage_name="warmup"), row(2, stage_name="warmup"),
-            row(3, stage_name="static", iteration_stage_name="warmup"),
-            row(4, stage_name="static", iteration_stage_name="static")]
-    (tmp_path / "result.json").write_text("".join(json.dumps(r) + "\n" for r in rows))
-    assert training_curve(tmp_path).stages == ["warmup", "warmup", "warmup", "static"]
-    summary = write_summary(tmp_path, tmp_path / "summary")
-    assert training_curve(summary).stages == ["warmup", "warmup", "warmup", "static"]
-
-
-def test_stage_figures_add_up_each_phase_and_weight_rates_by_episodes(tmp_path):
-    def row(iteration, stage, episodes, win, variance):
-        return {"training_iteration": iteration, "time_total_s": 60.0 * iteration,
-                "curriculum": {"iteration_stage_name": stage},
-                "env_runners": {"num_episodes_lifetime": episodes,
-                                "num_env_steps_sampled_lifetime": 1000 * iteration,
-                                "episode_return_mean": 0.0, "learner_win": win,
-                                "learner_loss": 1 - win, "learner_tie": 0.0},
-                "learners": {"learner": {"vf_explained_var": variance}}}
-
-    rows = [row(1, "warmup", 10, 0.0, 0.1), row(2, "warmup", 40, 1.0, 0.3),
-            row(3, "static", 50, 0.5, 0.5)]
-    trial = tmp_path / "PPO_x"
-    trial.mkdir()
-    (trial / "result.json").write_text("".join(json.dumps(r) + "\n" for r in rows))
-    warmup, static = stage_figures(trial)
-    assert (warmup.stage, warmup.iterations, warmup.episodes, warmup.env_steps, warmup.seconds) \
-        == ("warmup", 2, 40, 2000, 120.0)
-    assert warmup.win == pytest.approx((10 * 0.0 + 30 * 1.0) / 40)
-    assert warmup.explained_variance == pytest.approx((0.2, 0.2))
-    assert (static.episodes, static.env_steps, static.win) == (10, 1000, 0.5)
-    assert np.isnan(static.override_share)  # not logged
-    table = training_table([warmup, static])
-    assert "| tmp_path | warmup | 2 | 40 | 2,000 | 0.03 | 17 | 0.750 / 0.250 / 0.000 | — |" \
-        .replace("tmp_path", tmp_path.name) in table
-
-
 def test_versions_of_our_teams_meet_the_paper_table_of_their_family():
     assert paper_table("imitation_v1") is paper_table("imitation") is PAPER_TABLES["imitation"]
     assert paper_table("imitation_v2") is PAPER_TABLES["imitation"]
     assert paper_table("ppo_v2") is PAPER_TABLES["ppo"]
     assert paper_table("ppo_team") is PAPER_TABLES["ppo"]  # ours, beside the agent it would beat
     assert paper_table("ppo_cautious") is None and paper_table("simple") is None
-
-
-def test_each_rows_reward_kind_comes_from_the_log_or_else_the_trials_params(tmp_path):
-    def row(iteration, **curriculum):
-        return {"training_iteration": iteration, "curriculum": curriculum,
-                "env_runners": {"num_episodes_lifetime": 10 * iteration,
-                                "episode_return_mean": 0.0}}
-
-    old, new = tmp_path / "PPO_old", tmp_path / "PPO_new"
-    for trial, rows in ((old, [row(1), row(2)]),
-                        (new, [row(1, iteration_reward="shaped"), row(2, iteration_reward="raw")])):
-        trial.mkdir()
-        (trial / "result.json").write_text("".join(json.dumps(r) + "\n" for r in rows))
-    assert training_curve(old).rewards == ["", ""]  # not logged, no params.json: unknown
-    (old / "params.json").write_text(json.dumps({"env_config": {"reward": "raw"}}))
-    (new / "params.json").write_text(json.dumps({"env_config": {"reward": "shaped"}}))
-    assert training_curve(old).rewards == ["raw", "raw"]
-    assert training_curve(new).rewards == ["shaped", "raw"]  # the log wins
-    assert training_curve(write_summary(old, tmp_path / "summary")).rewards == ["raw", "raw"]
 
 
 def test_fig3_draws_one_axis_per_reward_kind_and_says_what_its_mean_is_over(tmp_path):
@@ -325,3 +117,17 @@ def test_fig5_names_its_policies_and_explains_its_marks(tmp_path):
     titles = [ax.get_title() for ax in fig.axes if ax.get_title()]
     assert titles[0].startswith("ppo+jitter vs StaticAgent: positions")
     assert fig.get_supxlabel() == FIG5_MARKS and "circle" in FIG5_MARKS
+
+
+def test_training_outcomes_draw_kills_where_a_run_logs_them(tmp_path):
+    episodes = np.arange(1, 5) * 100.0
+    logged = TrainingCurve("league", episodes, np.zeros(4), ["a"] * 4, ["raw_kills"] * 4,
+                           np.full(4, 0.5), np.full(4, 0.1), np.linspace(0.2, 0.8, 4))
+    silent = TrainingCurve("paper", episodes, np.zeros(4), ["a"] * 4, ["shaped"] * 4,
+                           np.full(4, 0.5), np.full(4, 0.1))
+    outcomes, kills = plot_outcomes([logged, silent], tmp_path / "o.png").axes
+    assert [t.get_text() for t in kills.get_legend().get_texts()] == ["league"]
+    assert "killed per game" in kills.get_ylabel()
+    assert len(plot_outcomes([silent], tmp_path / "o.png").axes) == 1
+    (axis,) = plot_training([logged], tmp_path / "fig3.png").axes
+    assert "credited kill" in axis.get_title()

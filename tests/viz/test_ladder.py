@@ -10,7 +10,7 @@ from rllib_pommer.arena.ladder import LADDER_FILE, Ladder, rate, write_ladder
 from rllib_pommer.report import main
 from rllib_pommer.viz.ladder import ladder_table
 
-from ..test_ladder import games
+from ..arena.test_ladder import games
 
 
 def ladder_folder(tmp_path):

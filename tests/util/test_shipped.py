@@ -14,7 +14,7 @@ from rllib_pommer.agents.registry import resolve_policy
 from rllib_pommer.rl.curriculum import find_curriculum, load_curriculum
 from rllib_pommer.util import shipped
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 
 
 def test_a_variable_then_the_wheels_copy_then_the_repositorys_folder(tmp_path, monkeypatch):
