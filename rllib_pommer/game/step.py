@@ -372,7 +372,6 @@ def _explode(board, agents, bombs, meta, fire, burn, fresh):
     n_bombs = meta[M_BOMBS]
     size = board.shape[0]
     credit = np.empty(n_bombs, np.uint8)
-    cross = np.empty((size, size), np.uint8)
     pending = False
     for b in range(n_bombs):
         credit[b] = 1 << bombs[b, B_OWNER]
@@ -384,6 +383,7 @@ def _explode(board, agents, bombs, meta, fire, burn, fresh):
             credit[b] |= burn[bombs[b, B_ROW], bombs[b, B_COL]]
             pending = True
     while pending:
+        cross = np.empty((size, size), np.uint8)  # one bomb's blast at a time, for its credit
         pending = False
         kept = 0
         for b in range(n_bombs):

@@ -68,10 +68,7 @@ class SnapshotModule(TorchRLModule):
 
     def fill(self, pi: torch.nn.Module, episodes: int) -> None:
         """Copy `pi`'s weights in and open the slot at `episodes`; its block starts again."""
-        with torch.no_grad():
-            for mine, theirs in zip(self.pi.state_dict().values(), pi.state_dict().values(),
-                                    strict=True):
-                mine.copy_(theirs)
+        self.pi.load_state_dict(pi.state_dict())
         self.born.fill_(episodes)
         self.tally.zero_()
 
