@@ -370,6 +370,8 @@ def _explode(board, agents, bombs, meta, fire, burn, fresh):
     on every cell of its cross.
     """
     n_bombs = meta[M_BOMBS]
+    if n_bombs == 0:
+        return
     size = board.shape[0]
     credit = np.empty(n_bombs, np.uint8)
     pending = False
@@ -518,7 +520,8 @@ def step_game(board, agents, bombs, flames, items, meta, actions, rewards, game_
         _second_settle(agents, bombs, n_bombs, want, bwant, ao, bo, kicker_of, kicked_by)
     _commit_moves(board, agents, bombs, n_bombs, actions, want, bwant, kicked_by, blast_cap)
     fire = np.zeros((size, size), np.uint8)
-    fresh = np.zeros((size, size), np.uint8)
+    # this step's fire credit; without bombs no fire starts and nothing reads it
+    fresh = np.zeros((size, size), np.uint8) if meta[M_BOMBS] else fire
     _explode(board, agents, bombs, meta, fire, burn, fresh)
     _redraw(board, agents, bombs, flames, meta, fire, was_alive, burn, fresh, killers)
     meta[M_STEP] += 1
