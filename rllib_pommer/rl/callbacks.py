@@ -51,6 +51,13 @@ from .mapping import SeatMapping
 from .rl_module import LEARNER
 
 
+def _count(runners: dict, key: str) -> int:
+    """A counter from the env runners' results; 0 when absent or NaN (an iteration in which no
+    episode ended, e.g. the first one after a restore, reports NaN)."""
+    value = runners.get(key, 0)
+    return 0 if value != value else int(value)
+
+
 def _push_stage(env_runner, mapping: SeatMapping, env_settings: dict) -> None:
     mapping_fn = env_runner.config.policy_mapping_fn
     if (getattr(mapping_fn, "stage", None), getattr(mapping_fn, "opponent", None)) != (
@@ -166,7 +173,7 @@ class CurriculumCallback(RLlibCallback):
     def _gate(self, algorithm, runners: dict, episodes: int) -> dict:
         """The iteration's league games into the gate; a filled slot goes to the env runners."""
         league = self.curriculum.league
-        wins, games = int(runners.get("league_wins", 0)), int(runners.get("league_games", 0))
+        wins, games = _count(runners, "league_wins"), _count(runners, "league_games")
         filled = _on_learner(
             algorithm, lambda learner: gate_step(learner, league, wins, games, episodes))
         if filled:
@@ -178,11 +185,11 @@ class CurriculumCallback(RLlibCallback):
                 "members": list(members(book))}
 
     def on_train_result(self, *, algorithm, result, **kwargs) -> None:
-        episodes = int(result[ENV_RUNNER_RESULTS].get(NUM_EPISODES_LIFETIME, 0))
-        before = self.curriculum.stage_at(episodes - int(result[ENV_RUNNER_RESULTS].get(
-            NUM_EPISODES, 0)))
+        runners = result[ENV_RUNNER_RESULTS]
+        episodes = _count(runners, NUM_EPISODES_LIFETIME)
+        before = self.curriculum.stage_at(episodes - _count(runners, NUM_EPISODES))
         if self.curriculum.stages[before].self_play:
-            result["league"] = self._gate(algorithm, result[ENV_RUNNER_RESULTS], episodes)
+            result["league"] = self._gate(algorithm, runners, episodes)
         index = self.apply_stage(algorithm, episodes)
         finished = episodes >= self.curriculum.total_episodes  # the run stops after this one
         ended = self.curriculum.stages[before].name if before != index or finished else None

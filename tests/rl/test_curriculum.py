@@ -59,3 +59,29 @@ def test_a_file_anywhere_starts_from_the_shipped_weights_unless_it_names_its_own
 def test_episodes_last_as_long_as_the_team_game_unless_the_file_says_otherwise():
     assert load_curriculum("paper").max_steps == TEAM_PRESET.max_steps == 800
     assert load_curriculum("quick").max_steps == 400
+
+
+class _Group:
+    """Stands in for the env runner and learner groups: the stage push has nowhere to go."""
+    def foreach_env_runner(self, func, local_env_runner=True):
+        return []
+
+    def foreach_learner(self, func):
+        return []
+
+
+def test_an_iteration_in_which_no_episode_ended_keeps_the_stage():
+    """The first iteration after a restore may end no episode; RLlib then reports the
+    iteration's episode count as NaN, and the callback counts it as none."""
+    from types import SimpleNamespace
+
+    from ray.rllib.utils.metrics import ENV_RUNNER_RESULTS, NUM_EPISODES, NUM_EPISODES_LIFETIME
+
+    from rllib_pommer.rl.callbacks import CurriculumCallback
+
+    algorithm = SimpleNamespace(env_runner_group=_Group(), learner_group=_Group())
+    result = {ENV_RUNNER_RESULTS: {NUM_EPISODES_LIFETIME: 10_500, NUM_EPISODES: float("nan")}}
+    CurriculumCallback(load_curriculum("paper")).on_train_result(algorithm=algorithm,
+                                                                 result=result)
+    assert result["curriculum"]["stage"] == 1 and result["curriculum"]["episodes"] == 10_500
+    assert result["curriculum"]["ended_stage"] is None
