@@ -80,6 +80,9 @@ SUMMARY_COLUMNS = (
     "learners/learner/pi_rare_rows", "learners/learner/pi_rare_log_ratio_max",
     "learners/learner/pi_rare_log_ratio_min", "learners/learner/pi_dual_clipped_rows",
     "time_this_iter_s")
+# Kept too, whatever follows the prefix: a league's per-opponent outcomes and its gate's book.
+SUMMARY_PREFIXES = ("env_runners/learner_win_vs_", "env_runners/learner_loss_vs_",
+                    "env_runners/learner_tie_vs_", "env_runners/learner_kills_vs_", "league/")
 
 
 def run_name(trial: Path) -> str:
@@ -170,13 +173,14 @@ def read_trial(trial: Trial | Path) -> Trial:
 
 def write_summary(trial: Trial | Path, out: Path, name: str = "progress.csv") -> Path:
     """`out`/`name`: the trial's rows (restores resolved), only the columns the curve is drawn
-    from and those of `SUMMARY_COLUMNS` it has; written whole or not at all (it may replace the
-    file the rows were read from)."""
+    from and those of `SUMMARY_COLUMNS` and `SUMMARY_PREFIXES` it has; written whole or not at
+    all (it may replace the file the rows were read from)."""
     rows = read_trial(trial).rows
     curve = [_column(rows, names) for names in (RETURN_COLUMNS, LIFETIME_COLUMNS,
                                                 PER_ITERATION_COLUMNS)]
+    prefixed = sorted({c for row in rows for c in row if c.startswith(SUMMARY_PREFIXES)})
     columns = list(dict.fromkeys(c for c in [*SUMMARY_COLUMNS, *curve, *STAGE_COLUMNS,
-                                             REWARD_COLUMN]
+                                             REWARD_COLUMN, *prefixed]
                                  if c and any(c in row for row in rows)))
     out.mkdir(parents=True, exist_ok=True)
     partial = out / f".{name}.tmp"

@@ -157,6 +157,26 @@ def test_a_summary_keeps_the_curve_and_the_training_figures_only(tmp_path):
     assert again.name == "quick"
 
 
+def test_a_summary_keeps_a_leagues_per_opponent_outcomes_and_its_gate(tmp_path):
+    rows = [{"training_iteration": i, "env_runners": {
+                "num_episodes_lifetime": 10 * i, "learner_win": 0.5,
+                "learner_win_vs_static": 0.25 * i, "learner_kills_vs_simple": 1.5,
+                "learner_return_vs_simple": 0.1},
+             "league": {"gate_games": 40 * i, "gate_win_rate": 0.5, "snapshots": 0}}
+            for i in (1, 2)]
+    trial = tmp_path / "PPO_pommerman_team_00000"
+    trial.mkdir()
+    (trial / "result.json").write_text("".join(json.dumps(r) + "\n" for r in rows))
+    header, *lines = (write_summary(trial, tmp_path / "out") / "progress.csv").read_text(
+        ).splitlines()
+    columns = header.split(",")
+    assert {"env_runners/learner_win_vs_static", "env_runners/learner_kills_vs_simple",
+            "league/gate_games", "league/gate_win_rate", "league/snapshots"} <= set(columns)
+    assert "env_runners/learner_return_vs_simple" not in columns
+    kept = dict(zip(columns, lines[1].split(","), strict=True))
+    assert kept["env_runners/learner_win_vs_static"] == "0.5" and kept["league/gate_games"] == "80"
+
+
 def test_an_iteration_counts_in_the_stage_it_played_also_across_versions(tmp_path):
     def row(iteration, **curriculum):
         return {"training_iteration": iteration, "curriculum": curriculum,
