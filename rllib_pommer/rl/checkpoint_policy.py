@@ -42,6 +42,7 @@ from .history import (
     POLICY_HISTORY_DIR,
     POLICY_SOURCE_FILE,
     Trial,
+    exported_training,
     number,
     read_trial,
     write_summary,
@@ -284,6 +285,24 @@ def starting_policy(run: Path, curriculum: Curriculum, exclude: str = "") -> str
     return None
 
 
+def lineage(policy: str | None) -> list[dict]:
+    """The shipped policies pi descends from, oldest first, each with the games its own run
+    trained it (`exported_training`); the chain ends at a policy no PPO run exported (the
+    imitation clone), which counts 0. What the paper's game budget is counted against."""
+    chain, seen = [], set()
+    while policy and policy not in seen:
+        seen.add(policy)
+        folder = resolve_policy(policy).file("weights").parent
+        try:
+            source, training = exported_training(folder)
+        except ValueError:
+            chain.append({"policy": policy, "games": 0})
+            break
+        chain.append({"policy": policy, "games": sum(s.episodes for s in training.stages)})
+        policy = source.get("pi_start")
+    return chain[::-1]
+
+
 def _source(policy: str, checkpoint: Path, trial: Trial, iteration: int,
             curriculum: Curriculum) -> dict:
     """Where a policy came from, as its model card says (`viz/model_card.py`)."""
@@ -295,7 +314,8 @@ def _source(policy: str, checkpoint: Path, trial: Trial, iteration: int,
                        "stages": [dataclasses.asdict(stage) for stage in curriculum.stages]},
         "exported_at_commit": _git(run, "rev-parse", "--short", "HEAD") or "unknown",
         "run_commits": packed_commits(run, trial),
-        "pi_start": starting_policy(run, curriculum, exclude=policy),
+        "pi_start": (start := starting_policy(run, curriculum, exclude=policy)),
+        "lineage": lineage(start),
     }
 
 

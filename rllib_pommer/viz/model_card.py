@@ -40,12 +40,21 @@ def _schedule(curriculum: dict) -> str:
     return "\n".join(lines)
 
 
-def _start_line(source: dict) -> list[str]:
-    """Where pi began, where `checkpoint_policy.starting_policy` could prove it."""
+def _start_lines(source: dict, games: int) -> list[str]:
+    """Where pi began, where `checkpoint_policy.starting_policy` could prove it, and the games
+    counted from the clone its lineage starts at (`checkpoint_policy.lineage`)."""
     if not source.get("pi_start"):
         return []
-    return [f"- pi started from `{source['pi_start']}` (its `pi.pt` equals pi at the end of the "
-            f"run's pi-frozen first stage)"]
+    lines = [f"- pi started from `{source['pi_start']}` (its `pi.pt` equals pi at the end of the "
+             f"run's pi-frozen first stage)"]
+    chain = source.get("lineage") or []
+    if len(chain) > 1:
+        clone, *trained = chain
+        before = sum(link["games"] for link in trained)
+        steps = " + ".join(f"{link['games']:,} as `{link['policy']}`" for link in trained)
+        lines.append(f"- games counted from the imitation clone `{clone['policy']}`: {steps} + "
+                     f"{games:,} in this run = **{before + games:,}**")
+    return lines
 
 
 def _preface(source: dict, training: Training) -> list[str]:
@@ -77,7 +86,7 @@ def _preface(source: dict, training: Training) -> list[str]:
         "\n".join([
             f"- games: {games:,}; env steps: {steps:,}; training time: {hours:.1f} hours (the "
             f"run's `time_total_s`: its iterations, sessions added up)",
-            *_start_line(source),
+            *_start_lines(source, games),
             f"- code: exported at commit `{source['exported_at_commit']}`; the run was packed and "
             f"committed {len(commits)} time(s) ({', '.join(f'`{c}`' for c in commits) or 'never'}"
             f"), each session training with the code of the commit before its pack",

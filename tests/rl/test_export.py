@@ -34,7 +34,12 @@ from rllib_pommer.rl.checkpoint_policy import (
     load_checkpoint_net,
     packed_commits,
 )
-from rllib_pommer.rl.history import HISTORY_FILE, POLICY_HISTORY_DIR, read_trial
+from rllib_pommer.rl.history import (
+    HISTORY_FILE,
+    POLICY_HISTORY_DIR,
+    exported_training,
+    read_trial,
+)
 from rllib_pommer.train import main
 
 REPO = Path(__file__).resolve().parents[2]
@@ -167,6 +172,26 @@ def test_the_card_names_the_shipped_policy_pi_started_from(tmp_path):
         card = (target / "MODEL_CARD.md").read_text()
         assert ("pi started from `imitation_v2`" in card) == (expected is not None)
         assert ("pi started from" in card) == (expected is not None)
+
+
+def test_the_card_counts_the_games_from_the_imitation_clone_through_the_lineage(tmp_path):
+    """A run that starts from `ppo` (itself trained from the clone `imitation_v2`) counts the
+    games of both runs: the budget the paper's 100,000 games are set against."""
+    ppo = PommerNet()
+    ppo.load_state_dict(torch.load(REPO / "policies/ppo/pi.pt", weights_only=True))
+    trial = _fake_run(tmp_path / "run", ppo)
+    shutil.copytree(trial / "checkpoint_000002", tmp_path / "run" / "stages" / "1-warmup")
+    target = tmp_path / "policy"
+    assert main(["--out", str(tmp_path / "run"), "--export", str(target)]) == 0
+    _, ppo_training = exported_training(REPO / "policies/ppo")
+    ppo_games = sum(stage.episodes for stage in ppo_training.stages)
+    assert ppo_games > 0
+    source = json.loads((target / "source.json").read_text())
+    assert source["lineage"] == [{"policy": "imitation_v2", "games": 0},
+                                 {"policy": "ppo", "games": ppo_games}]
+    card = (target / "MODEL_CARD.md").read_text()
+    assert (f"games counted from the imitation clone `imitation_v2`: {ppo_games:,} as `ppo` + "
+            f"18 in this run = **{ppo_games + 18:,}**") in card  # 6 games an iteration, to 3
 
 
 def test_export_names_what_is_missing(tmp_path, capsys):
