@@ -26,7 +26,7 @@ from .ladder import ladder_section
 from .matches import ROW_KEYS, load_outcomes, rates_by_opponent
 from .paper import paper_table
 from .render import render_game
-from .tables import results_table, training_table
+from .tables import milestones_table, results_table, training_table
 from .training import RLLIB_WINDOW, WINDOW, Training
 from .viewer import write_viewer
 
@@ -95,6 +95,11 @@ def fig3_section(training: Training, out: Path, summaries: str = "") -> Iterator
     yield "![training win and loss rates](fig3_outcomes.png)"
     yield ("The same means of the learner's team's win and loss rates: one scale for every "
            "run, whatever reward it was paid.")
+    if len(training.curves) > 1:
+        yield ("Where each run stood after the same numbers of games: the win / loss means "
+               "above (and enemies its team killed per game, where logged), with the phase in "
+               "force; runs meet different opponents at the same count, so read the phase too.")
+        yield milestones_table(training.curves)
     yield training_table(training.stages)
     if summaries:
         yield (f"Each run's curve and training figures per iteration are in `{summaries}/<run>/"

@@ -2,7 +2,8 @@
 four variants, each cell win / loss / tie; ours over n games with their 95% Wilson intervals and,
 where the records carry kill credit, per game the opponents we killed, the opponents' suicides,
 ours, and our bombs per agent; the paper's (1000 games) below. And
-the training table: what each curriculum phase of each run cost and how the learner did."""
+the training tables: what each curriculum phase of each run cost and how the learner did, and
+where each run stood after the same numbers of games (the reading of Fig. 3 across runs)."""
 
 from __future__ import annotations
 
@@ -10,7 +11,9 @@ import math
 
 from .matches import VARIANTS, Match, Outcomes
 from .paper import PAPER_OPPONENTS, paper_table
-from .training import StageFigures
+from .training import StageFigures, TrainingCurve
+
+MILESTONES = (5_000, 10_000, 20_000, 30_000, 40_000, 60_000, 100_000)  # games, for milestones_table
 
 
 def _rates(cell) -> str:
@@ -65,4 +68,27 @@ def training_table(figures: list[StageFigures]) -> str:
             f"{f.seconds / 3600:.2f} | {_figure(rate, 0)} | {_figure(f.win)} / "
             f"{_figure(f.loss)} / {_figure(f.tie)} | {_figure(100 * f.override_share, 2, '%')} | "
             f"{_figure(f.explained_variance[0], 2)} → {_figure(f.explained_variance[1], 2)} |")
+    return "\n".join(lines)
+
+
+def milestones_table(curves: list[TrainingCurve], milestones=MILESTONES) -> str:
+    """One row per run, one column per number of games any run reached: the curves' rolling
+    win / loss rates (and kills per game where logged) at the run's last row within that many
+    games, and the phase it was in; "—" where the run had not got there."""
+    reached = [m for m in milestones if any(len(c.episodes) and c.episodes[-1] >= m
+                                            for c in curves)]
+    lines = ["| run | " + " | ".join(f"{m:,} games" for m in reached) + " |",
+             "|---" * (len(reached) + 1) + "|"]
+    for curve in curves:
+        cells = []
+        for m in reached:
+            rows = (curve.episodes <= m).nonzero()[0]
+            if not len(curve.episodes) or curve.episodes[-1] < m or not len(rows):
+                cells.append("—")
+                continue
+            i = rows[-1]
+            kills = "" if math.isnan(curve.kills[i]) else f", kills {curve.kills[i]:.2f}"
+            cells.append(f"{_figure(curve.wins[i], 2)} / {_figure(curve.losses[i], 2)}{kills} "
+                         f"({curve.stages[i] or '—'})")
+        lines.append(f"| {curve.name} | " + " | ".join(cells) + " |")
     return "\n".join(lines)

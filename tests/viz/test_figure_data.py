@@ -13,6 +13,7 @@ from rllib_pommer.viz.behaviour import Heatmaps, heatmaps_by_opponent, to_top_le
 from rllib_pommer.viz.figures import FIG5_MARKS, plot_behaviour, plot_outcomes, plot_training
 from rllib_pommer.viz.matches import Match, load_outcomes, match_of
 from rllib_pommer.viz.paper import PAPER_OPPONENTS, PAPER_TABLES, paper_table
+from rllib_pommer.viz.tables import milestones_table
 from rllib_pommer.viz.training import TrainingCurve
 
 from ..conftest import PAPER_TABLES as PAPER_TEX
@@ -131,3 +132,17 @@ def test_training_outcomes_draw_kills_where_a_run_logs_them(tmp_path):
     assert len(plot_outcomes([silent], tmp_path / "o.png").axes) == 1
     (axis,) = plot_training([logged], tmp_path / "fig3.png").axes
     assert "credited kill" in axis.get_title()
+
+
+def test_milestones_compare_runs_at_equal_games_and_skip_what_none_reached():
+    paper = TrainingCurve("paper", np.array([4_000.0, 9_000, 12_000, 21_000]), np.zeros(4),
+                          ["warmup", "static", "static", "nobomb"], ["shaped"] * 4,
+                          np.array([0.1, 0.2, 0.3, 0.4]), np.array([0.5, 0.4, 0.3, 0.2]))
+    league = TrainingCurve("league", np.array([3_000.0, 6_000]), np.zeros(2), ["w", "l"],
+                           ["raw_kills"] * 2, np.array([0.25, 0.75]), np.array([0.0, 0.05]),
+                           np.array([0.5, 1.25]))
+    header, rule, first, second = milestones_table([paper, league]).splitlines()
+    assert header == "| run | 5,000 games | 10,000 games | 20,000 games |"
+    assert first == ("| paper | 0.10 / 0.50 (warmup) | 0.20 / 0.40 (static) | "
+                     "0.30 / 0.30 (static) |")
+    assert second == "| league | 0.25 / 0.00, kills 0.50 (w) | — | — |"
