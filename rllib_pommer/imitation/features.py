@@ -47,8 +47,8 @@ ENEMY_DESIRABILITY, TEAMMATE_DESIRABILITY, OWN_DESIRABILITY = 4, 6, 2
 
 def _identity_table() -> np.ndarray:
     """[game_type, agent_id] -> board codes of teammate, first enemy, second enemy (-1: none)."""
-    table = np.full((3, 4, 3), -1, np.int64)
-    for game_type in (GameType.FFA, GameType.TEAM):
+    table = np.full((max(GameType) + 1, 4, 3), -1, np.int64)
+    for game_type in GameType:
         for agent in range(4):
             mate = teammate_of(agent, game_type)
             table[game_type, agent] = (mate if mate != Item.AGENT_DUMMY else -1,
