@@ -5,7 +5,8 @@ Each target's measures live beside the code they measure; this job runs them, an
 agents compares with the reference's figures (tests/reference/reference_speed.json):
 
 - `engine`: protocol (a) of docs/measurements.md (speed protocols) on the single-game and the
-  batched API (`game/speed.py`);
+  batched API (`game/speed.py`), for Team and, on the same games, TeamRadio with words (the
+  `radio_..._vs_team` figures are radio's median over Team's);
 - `agents`: protocol (b), four SimpleAgents as one object per seat and as the batched kernel
   (`agents/speed.py`);
 - `train`: the quick curriculum's PPO for a few iterations on the real env and on a zero-cost twin
@@ -28,6 +29,7 @@ import argparse
 import json
 import statistics
 import sys
+from functools import partial
 from pathlib import Path
 
 RUNS = 3
@@ -41,7 +43,8 @@ def _stats(values: list[float]) -> dict:
 
 
 def _measure(variants: dict, section: str, figure: str) -> dict:
-    """Run each variant RUNS times after one warm-up run (compiles or loads the kernel cache).
+    """Run each variant RUNS times after one warm-up run (compiles or loads the kernel cache),
+    the variants taking turns run by run so that a change of load hits them alike.
 
     The result is flat: `<variant>_steps_per_s` and `<variant>_games_per_s` medians (min, median,
     max and runs under `..._runs`), the reference's median `reference_<figure>` from `section` of
@@ -50,8 +53,11 @@ def _measure(variants: dict, section: str, figure: str) -> dict:
     for run in variants.values():
         run(0)
     out: dict = {}
-    for name, run in variants.items():
-        results = [run(r) for r in range(RUNS)]
+    runs = {name: [] for name in variants}
+    for r in range(RUNS):
+        for name, run in variants.items():
+            runs[name].append(run(r))
+    for name, results in runs.items():
         for i, unit in enumerate(("steps_per_s", "games_per_s")):
             stats = _stats([result[i] for result in results])
             out[f"{name}_{unit}"] = stats["median"]
@@ -64,10 +70,16 @@ def _measure(variants: dict, section: str, figure: str) -> dict:
 
 
 def bench_engine() -> dict:
+    from .game.constants import RADIO_PRESET
     from .game.speed import batched_api_run, single_api_run
 
-    return _measure({"single": single_api_run, "batched": batched_api_run},
-                    "a_random_env_step", "steps_per_s")
+    apis = {"single": single_api_run, "batched": batched_api_run}
+    variants = {**apis, **{f"radio_{api}": partial(run, config=RADIO_PRESET)
+                           for api, run in apis.items()}}
+    out = _measure(variants, "a_random_env_step", "steps_per_s")
+    for api in apis:
+        out[f"radio_{api}_vs_team"] = out[f"radio_{api}_steps_per_s"] / out[f"{api}_steps_per_s"]
+    return out
 
 
 def bench_agents() -> dict:
@@ -110,10 +122,12 @@ def _print(title: str, result: dict) -> None:
             print(f"{key[:-5]:44s} {s['min']:10.1f} {s['median']:10.1f} {s['max']:10.1f}")
     print(", ".join(f"{k} {v:.1f}" for k, v in result.items() if k.startswith("reference")))
     print(", ".join(f"{k} {v:.1f}x" for k, v in result.items() if k.endswith("_ratio")))
+    if any(k.endswith("_vs_team") for k in result):
+        print(", ".join(f"{k} {v:.3f}" for k, v in result.items() if k.endswith("_vs_team")))
 
 
 TARGETS = {
-    "engine": ("protocol (a): Team, 200 games x 3 runs", bench_engine),
+    "engine": ("protocol (a): Team and TeamRadio, 200 games x 3 runs", bench_engine),
     "agents": ("protocol (b): 4 SimpleAgents, 20 games x 3 runs", bench_agents),
     "train": ("PPO sampling + learning, real env vs zero-cost env", bench_train),
     "layout": ("PPO env steps/s: 0 env runners + 1 learner thread vs 2 + 2 (an idle machine)",

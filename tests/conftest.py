@@ -10,6 +10,7 @@ import pytest
 REPO_ROOT = Path(__file__).resolve().parents[1]
 REFERENCE_DIR = REPO_ROOT / "tests" / "reference"
 PUBLIC_GAMES = REFERENCE_DIR / "games_public.jsonl.gz"
+RADIO_GAMES = REFERENCE_DIR / "radio" / "games_radio_public.jsonl.gz"
 DECISIONS = REFERENCE_DIR / "simpleagent_decisions_public.json"
 PAPER_TABLES = REFERENCE_DIR / "paper_tables.tex"
 
@@ -17,3 +18,8 @@ PAPER_TABLES = REFERENCE_DIR / "paper_tables.tex"
 @pytest.fixture(scope="session")
 def public_games() -> Path:
     return PUBLIC_GAMES
+
+
+@pytest.fixture(scope="session")
+def radio_games() -> Path:
+    return RADIO_GAMES

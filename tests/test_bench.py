@@ -5,9 +5,12 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
+
 from rllib_pommer import bench
 from rllib_pommer.agents import speed as agents_speed
 from rllib_pommer.game import speed as game_speed
+from rllib_pommer.game.constants import RADIO_PRESET, TEAM_PRESET
 
 
 def test_engine_and_agent_runs_measure_whole_games(monkeypatch):
@@ -19,6 +22,13 @@ def test_engine_and_agent_runs_measure_whole_games(monkeypatch):
         assert steps_per_s > games_per_s > 0
 
 
+def test_radio_runs_play_the_team_runs_games_with_words():
+    team_seeds, moves = game_speed._run_actions(3, TEAM_PRESET)
+    radio_seeds, actions = game_speed._run_actions(3, RADIO_PRESET)
+    assert np.array_equal(team_seeds, radio_seeds) and np.array_equal(actions[..., 0], moves)
+    assert actions.shape[-1] == 3 and actions[..., 1:].max() == 7
+
+
 def test_bench_engine_prints_our_speed_beside_the_reference(monkeypatch, capsys):
     monkeypatch.setattr(game_speed, "GAMES_PER_RUN", 2)
     monkeypatch.setattr(bench, "RUNS", 2)
@@ -26,7 +36,10 @@ def test_bench_engine_prints_our_speed_beside_the_reference(monkeypatch, capsys)
     result = json.loads(capsys.readouterr().out)
     reference = json.loads(bench.REFERENCE_SPEED.read_text())["a_random_env_step"]
     assert result["reference_steps_per_s"] == reference["steps_per_s"]["median"]
-    for api in ("single", "batched"):
+    for api in ("single", "batched", "radio_single", "radio_batched"):
         assert len(result[f"{api}_steps_per_s_runs"]["runs"]) == 2
         assert result[f"{api}_ratio"] == result[f"{api}_steps_per_s"] / reference[
             "steps_per_s"]["median"]
+    for api in ("single", "batched"):
+        assert result[f"radio_{api}_vs_team"] == (result[f"radio_{api}_steps_per_s"]
+                                                  / result[f"{api}_steps_per_s"])

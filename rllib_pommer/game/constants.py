@@ -6,7 +6,7 @@ tests/reference/README.md), so they are fixed here once and every other module i
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from enum import IntEnum
 
 import numpy as np
@@ -52,6 +52,7 @@ class Result(IntEnum):
 class GameType(IntEnum):
     FFA = 1
     TEAM = 2
+    TEAM_RADIO = 3
 
 
 # Codes a true board holds (Fog and AgentDummy appear in observations only), and the power-ups.
@@ -71,7 +72,16 @@ MAX_STEPS = 800  # the step limit of both presets: a game still going then is a 
 ACTION_DR = np.array([0, -1, 1, 0, 0, 0], dtype=np.int64)
 ACTION_DC = np.array([0, 0, 0, -1, 1, 0], dtype=np.int64)
 START_POSITIONS = ((1, 1), (9, 1), (9, 9), (1, 9))
-GAME_ENV_STRING = "pommerman.envs.v0:Pomme"
+# The `game_env` string observations carry, by game type (TeamRadio is the reference's v2 env).
+GAME_ENV_STRINGS = {
+    GameType.FFA: "pommerman.envs.v0:Pomme",
+    GameType.TEAM: "pommerman.envs.v0:Pomme",
+    GameType.TEAM_RADIO: "pommerman.envs.v2:Pomme",
+}
+# TeamRadio's channel (docs/rules.md §10): each step an agent may send this many words, each a
+# number below the vocabulary size.
+RADIO_NUM_WORDS = 2
+RADIO_VOCAB_SIZE = 8
 
 # Capacities of the fixed-shape state arrays. Bombs never share a cell, and a cell holds at most
 # three flame records (created on three consecutive steps), so these bound any reachable state.
@@ -103,8 +113,11 @@ class GameConfig:
 # The presets by name (`preset`); a preset's `game_type` is the GameType code states carry.
 TEAM_PRESET = GameConfig("team", "PommeTeamCompetition-v0", GameType.TEAM, view_radius=4)
 FFA_PRESET = GameConfig("ffa", "PommeFFACompetition-v0", GameType.FFA)
-PRESETS = {"team": TEAM_PRESET, "ffa": FFA_PRESET}
-CONFIG_BY_ENV_ID = {TEAM_PRESET.env_id: TEAM_PRESET, FFA_PRESET.env_id: FFA_PRESET}
+# TeamRadio: the Team game plus the words channel (docs/rules.md §10).
+RADIO_PRESET = replace(TEAM_PRESET, name="radio", env_id="PommeRadioCompetition-v2",
+                       game_type=GameType.TEAM_RADIO)
+PRESETS = {p.name: p for p in (TEAM_PRESET, FFA_PRESET, RADIO_PRESET)}
+CONFIG_BY_ENV_ID = {p.env_id: p for p in PRESETS.values()}
 
 
 def preset(name: str) -> GameConfig:
@@ -115,16 +128,27 @@ def preset(name: str) -> GameConfig:
         raise ValueError(f"unknown game preset {name!r}; valid: {sorted(PRESETS)}") from None
 
 
+def has_teams(game_type: int) -> bool:
+    """Whether the game is played in two teams, agents 0 and 2 against 1 and 3: Team and TeamRadio
+    (which share every team rule: identities, end, rewards, info), not FFA."""
+    return game_type == GameType.TEAM or game_type == GameType.TEAM_RADIO
+
+
+def has_radio(game_type: int) -> bool:
+    """Whether agents send words (TeamRadio)."""
+    return game_type == GameType.TEAM_RADIO
+
+
 def teammate_of(agent_id: int, game_type: int) -> int:
     """Item code of the teammate (AgentDummy in FFA)."""
-    if game_type == GameType.TEAM:
+    if has_teams(game_type):
         return Item.AGENT0 + (agent_id + 2) % NUM_AGENTS
     return int(Item.AGENT_DUMMY)
 
 
 def enemies_of(agent_id: int, game_type: int) -> list[int]:
     """Item codes of the enemies, in the reference's order (Team appends AgentDummy)."""
-    if game_type == GameType.TEAM:
+    if has_teams(game_type):
         return [Item.AGENT0 + i for i in range(NUM_AGENTS) if i % 2 != agent_id % 2] + [
             int(Item.AGENT_DUMMY)
         ]

@@ -2,6 +2,9 @@
 
 A record holds `initial_state` and, per step, the actions and the resulting state, rewards, done,
 info and (optionally) the four observations, so any recorded position can be reloaded and replayed.
+A TeamRadio record also holds, per step, `full_actions`: each agent's action as passed, a move or
+[move, word, word] (`actions` keeps the moves alone); its states carry `radio_from_agent` and its
+observations `message`.
 """
 
 from __future__ import annotations
@@ -14,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from .constants import CONFIG_BY_ENV_ID, NUM_AGENTS, GameConfig, Result
-from .engine import Games, info_dict
+from .engine import Games, info_dict, radio_actions
 from .serialize import dump_observation
 
 
@@ -89,6 +92,22 @@ def write_games(path: str | Path, records: Iterable[dict]) -> int:
     return count
 
 
+def observation_dicts(games: Games, index: int) -> list[dict]:
+    """The four current observations of game `index` as reference dicts (with `message` in
+    TeamRadio)."""
+    obs = games.obs
+    message = games.message[index] if games.radio else [None] * NUM_AGENTS
+    return [dump_observation(obs.select(index, a), message[a]) for a in range(NUM_AGENTS)]
+
+
+def full_actions(actions) -> list:
+    """One game's actions as a TeamRadio record's `full_actions`: a move stays an int, a
+    [move, word, word] a list (validated by `engine.radio_actions`)."""
+    rows = radio_actions(actions)
+    return [int(row[0]) if np.ndim(action) == 0 else row.tolist()
+            for row, action in zip(rows, actions, strict=True)]
+
+
 def config_of(record: dict) -> GameConfig:
     env_id = record.get("env_id")
     if env_id not in CONFIG_BY_ENV_ID:
@@ -115,26 +134,29 @@ class GameRecorder:
             "steps": [],
         }
 
-    def _observations(self) -> list[dict]:
-        obs = self.games.obs
-        return [dump_observation(obs.select(self.index, a)) for a in range(NUM_AGENTS)]
-
     def start(self) -> None:
         if self.with_observations:
-            self.record["initial_observations"] = self._observations()
+            self.record["initial_observations"] = observation_dicts(self.games, self.index)
 
     def step(self, actions) -> None:
+        """Record the step just played with `actions` (this game's four, as passed)."""
         n = self.index
         rewards = self.games.rewards[n]
+        if self.games.radio:
+            full = full_actions(actions)
+            moves = [a if isinstance(a, int) else a[0] for a in full]
+        else:
+            moves = [int(a) for a in actions]
         entry = {
-            "actions": [int(a) for a in actions],
+            "actions": moves,
+            **({"full_actions": full} if self.games.radio else {}),
             "state": self.games.dump(n),
             "rewards": [int(r) for r in rewards],
             "done": bool(self.games.done[n]),
             "info": info_dict(int(self.games.results[n]), rewards),
         }
         if self.with_observations:
-            entry["observations"] = self._observations()
+            entry["observations"] = observation_dicts(self.games, n)
         self.record["steps"].append(entry)
 
     def finish(self) -> dict:

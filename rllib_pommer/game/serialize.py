@@ -13,16 +13,19 @@ import numpy as np
 
 from .constants import (
     BOARD_SIZE,
-    GAME_ENV_STRING,
+    GAME_ENV_STRINGS,
     MAX_BOMBS,
     MAX_FLAMES,
     MAX_ITEMS,
     NUM_AGENTS,
     POWER_UP_CODES,
+    RADIO_NUM_WORDS,
+    RADIO_VOCAB_SIZE,
     STATE_BOARD_CODES,
     GameType,
     Item,
     enemies_of,
+    has_radio,
     teammate_of,
 )
 from .observation import Observation
@@ -172,11 +175,26 @@ def load_state(d: Mapping, out: GameState | None = None, index: int = 0) -> Game
     state.meta[index, M_ITEMS] = len(items)
     state.meta[index, M_BOMBS] = len(bombs)
     state.meta[index, M_FLAMES] = len(flames)
+    if "radio_from_agent" in d:
+        state.radio[index] = _words_by_agent(d["radio_from_agent"])
     return state
 
 
+def _words_by_agent(value: Any) -> np.ndarray:
+    """A state's `radio_from_agent`: four [word, word] pairs, each word 0..7."""
+    where = "state.radio_from_agent"
+    if not isinstance(value, Sequence) or len(value) != NUM_AGENTS:
+        raise ValueError(f"{where}: expected {NUM_AGENTS} pairs of words, got {value!r:.80}")
+    out = np.zeros((NUM_AGENTS, RADIO_NUM_WORDS), np.uint8)
+    for i, pair in enumerate(value):
+        if not isinstance(pair, Sequence) or len(pair) != RADIO_NUM_WORDS:
+            raise ValueError(f"{where}[{i}]: expected [word, word], got {pair!r:.80}")
+        out[i] = [_int(w, f"{where}[{i}]", 0, RADIO_VOCAB_SIZE - 1) for w in pair]
+    return out
+
+
 def dump_state(state: GameState, index: int = 0, game_type: int = GameType.TEAM) -> dict:
-    """Game `index` of `state` as a reference state dict."""
+    """Game `index` of `state` as a reference state dict (with `radio_from_agent` in TeamRadio)."""
     meta = state.meta[index]
     agents = []
     for i, row in enumerate(state.agents[index]):
@@ -192,7 +210,7 @@ def dump_state(state: GameState, index: int = 0, game_type: int = GameType.TEAM)
                 "enemies": enemies_of(i, game_type),
             }
         )
-    return {
+    out = {
         "step_count": int(meta[M_STEP]),
         "board": state.board[index].tolist(),
         "items": state.items[index, : meta[M_ITEMS]].tolist(),
@@ -212,6 +230,9 @@ def dump_state(state: GameState, index: int = 0, game_type: int = GameType.TEAM)
             for f in state.flames[index, : meta[M_FLAMES]]
         ],
     }
+    if has_radio(game_type):
+        out["radio_from_agent"] = state.radio[index].tolist()
+    return out
 
 
 OBS_MAPS = ("board", "bomb_blast_strength", "bomb_life", "bomb_moving_direction", "flame_life")
@@ -241,15 +262,17 @@ def load_observation(d: Mapping, agent_id: int) -> Observation:
         can_kick=np.bool_(_bool(_field(d, "can_kick", where), f"{where}.can_kick")),
         alive=alive,
         agent_id=np.int32(agent_id),
-        game_type=np.int32(_int(_field(d, "game_type", where), f"{where}.game_type", 1, 2)),
+        game_type=np.int32(_int(_field(d, "game_type", where), f"{where}.game_type", 1,
+                                int(max(GameType)))),
         step_count=np.int32(
             _int(_field(d, "step_count", where), f"{where}.step_count", 0, 2**31 - 1)
         ),
     )
 
 
-def dump_observation(obs: Observation) -> dict:
-    """One agent's observation (leading shape ()) as a reference observation dict."""
+def dump_observation(obs: Observation, message: np.ndarray | None = None) -> dict:
+    """One agent's observation (leading shape ()) as a reference observation dict; in TeamRadio
+    pass the words it hears (`Games.message`), which become its last field `message`."""
     agent_id, game_type = int(obs.agent_id), int(obs.game_type)
     out = {
         "alive": [Item.AGENT0 + i for i in range(NUM_AGENTS) if obs.alive[i]],
@@ -259,7 +282,7 @@ def dump_observation(obs: Observation) -> dict:
         "bomb_moving_direction": obs.bomb_moving_direction.tolist(),
         "flame_life": obs.flame_life.tolist(),
         "game_type": game_type,
-        "game_env": GAME_ENV_STRING,
+        "game_env": GAME_ENV_STRINGS[game_type],
         "position": obs.position.tolist(),
         "blast_strength": int(obs.blast_strength),
         "can_kick": bool(obs.can_kick),
@@ -269,4 +292,6 @@ def dump_observation(obs: Observation) -> dict:
         "step_count": int(obs.step_count),
     }
     out["alive"] = [int(a) for a in out["alive"]]
+    if message is not None:
+        out["message"] = [int(w) for w in message]
     return out

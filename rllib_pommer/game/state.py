@@ -13,7 +13,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .constants import BOARD_SIZE, MAX_BOMBS, MAX_FLAMES, MAX_ITEMS, NUM_AGENTS
+from .constants import BOARD_SIZE, MAX_BOMBS, MAX_FLAMES, MAX_ITEMS, NUM_AGENTS, RADIO_NUM_WORDS
 
 # Columns of `GameState.agents` (N, 4, 6).
 A_ROW, A_COL, A_ALIVE, A_AMMO, A_BLAST, A_KICK = range(6)
@@ -36,6 +36,8 @@ class GameState(NamedTuple):
     flames: (N, MAX_FLAMES, 3) int32 rows [row, col, life].
     items:  (N, MAX_ITEMS, 3) int32 rows [row, col, item code] of hidden power-ups.
     meta:   (N, 5) int32 [step_count, n_items, n_bombs, n_flames, done].
+    radio:  (N, 4, 2) uint8 the words each agent sent in the last step, by agent id (TeamRadio,
+            docs/rules.md §10; all zero in the other games).
     """
 
     board: np.ndarray
@@ -44,6 +46,7 @@ class GameState(NamedTuple):
     flames: np.ndarray
     items: np.ndarray
     meta: np.ndarray
+    radio: np.ndarray
 
     @property
     def num_games(self) -> int:
@@ -70,4 +73,5 @@ def empty_state(num_games: int, board_size: int = BOARD_SIZE) -> GameState:
         flames=np.zeros((num_games, MAX_FLAMES, 3), np.int32),
         items=np.zeros((num_games, MAX_ITEMS, 3), np.int32),
         meta=np.zeros((num_games, 5), np.int32),
+        radio=np.zeros((num_games, NUM_AGENTS, RADIO_NUM_WORDS), np.uint8),
     )

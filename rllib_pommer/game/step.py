@@ -20,9 +20,9 @@ from .constants import (
     MAX_AMMO,
     NUM_AGENTS,
     Action,
-    GameType,
     Item,
     Result,
+    has_teams,
 )
 from .state import (
     A_ALIVE,
@@ -56,7 +56,7 @@ PASSAGE, RIGID, WOOD, BOMB, FLAMES = (
 EXTRA_BOMB, INCR_RANGE, KICK = int(Item.EXTRA_BOMB), int(Item.INCR_RANGE), int(Item.KICK)
 AGENT0 = int(Item.AGENT0)
 STOP, BOMB_ACTION = int(Action.STOP), int(Action.BOMB)
-TEAM_GAME = int(GameType.TEAM)
+_has_teams = njit(inline="always")(has_teams)
 RESULT_WIN, RESULT_TIE, RESULT_INCOMPLETE = (
     int(Result.WIN), int(Result.TIE), int(Result.INCOMPLETE))
 
@@ -69,6 +69,18 @@ def _is_power_up(code):
 @njit(cache=True, inline="always")
 def _is_wall(code):
     return code == RIGID or code == WOOD
+
+
+@njit(cache=True)
+def _send_words(agents, words, radio):
+    """§10.2: keep each agent's words of this step; one dead at the start of the step sends (0, 0).
+
+    `words` (4, 2) by agent; in games without radio it is all zero.
+    """
+    for a in range(NUM_AGENTS):
+        alive = agents[a, A_ALIVE] != 0
+        for j in range(words.shape[1]):
+            radio[a, j] = words[a, j] if alive else 0
 
 
 @njit(cache=True)
@@ -455,7 +467,7 @@ def _score(agents, meta, game_type, max_steps, rewards):
             n_alive += 1
             alive_mask |= 1 << a
     timeout = meta[M_STEP] >= max_steps
-    if game_type == TEAM_GAME:
+    if _has_teams(game_type):
         team_a_only = alive_mask != 0 and (alive_mask & 0b1010) == 0
         team_b_only = alive_mask != 0 and (alive_mask & 0b0101) == 0
         done = timeout or n_alive <= 1 or team_a_only or team_b_only
@@ -487,9 +499,12 @@ def _score(agents, meta, game_type, max_steps, rewards):
 
 
 @njit(cache=True)
-def step_game(board, agents, bombs, flames, items, meta, actions, rewards, game_type, max_steps,
-              blast_cap, burn, killers):
+def step_game(board, agents, bombs, flames, items, meta, radio, actions, words, rewards, game_type,
+              max_steps, blast_cap, burn, killers):
     """Advance one game by one step in place; fill `rewards` (4,) and return the result code.
+
+    `actions` (4,) are the moves and `words` (4, 2) the words sent with them, which land in
+    `radio` (4, 2) before anything moves (§10.2).
 
     `burn` (S, S) and `killers` (4,) are the kill credit kept beside the state (uint8 bit masks of
     agents, `game/kills.py`): the credit of the fire on each cell, and of the fire each dead agent
@@ -497,6 +512,7 @@ def step_game(board, agents, bombs, flames, items, meta, actions, rewards, game_
     validates actions and never steps a done game.
     """
     size = board.shape[0]
+    _send_words(agents, words, radio)
     was_alive = agents[:, A_ALIVE] != 0
     _age_flames(board, flames, items, meta)
     want = np.empty((NUM_AGENTS, 2), np.int64)

@@ -1,7 +1,9 @@
 """Replay recorded games through our engine and compare every step with the recording.
 
 The comparison covers the full state (board, hidden items in order, agents, bombs and flames in
-list order), rewards, done, info and all four observations. On a mismatch the game is re-synced to
+list order, and in TeamRadio each agent's last words), rewards, done, info and all four
+observations (with `message` in TeamRadio). A TeamRadio record is replayed with its
+`full_actions`, which carry the words. On a mismatch the game is re-synced to
 the recorded state, so one divergence is reported once and the rest of the game is still checked.
 """
 
@@ -11,8 +13,7 @@ from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 
 from .engine import Game
-from .records import config_of
-from .serialize import dump_observation
+from .records import config_of, observation_dicts
 
 
 @dataclass
@@ -71,7 +72,7 @@ def verify_game(record: dict) -> tuple[int, list[Mismatch]]:
     game = Game.from_state(record["initial_state"], config_of(record))
     mismatches: list[Mismatch] = []
     for t, entry in enumerate(record["steps"]):
-        obs, rewards, done, info = game.step(entry["actions"])
+        _, rewards, done, info = game.step(entry.get("full_actions", entry["actions"]))
         found = [
             *_compare(entry["state"], game.dump(), seed, t, "state"),
             *_compare(entry["rewards"], [int(r) for r in rewards], seed, t, "rewards"),
@@ -79,9 +80,9 @@ def verify_game(record: dict) -> tuple[int, list[Mismatch]]:
             *_compare(entry["info"], info, seed, t, "info"),
         ]
         if "observations" in entry:
+            actual = observation_dicts(game.batch, 0)
             for a, expected in enumerate(entry["observations"]):
-                actual = dump_observation(obs.select(a))
-                found.extend(_compare(expected, actual, seed, t, f"observations[{a}]"))
+                found.extend(_compare(expected, actual[a], seed, t, f"observations[{a}]"))
         if found:
             mismatches.extend(found)
             game.load(entry["state"])
