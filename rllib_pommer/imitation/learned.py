@@ -38,12 +38,14 @@ from ..agents.registry import (
 from ..game.constants import NUM_ACTIONS
 from ..game.observation import Observation
 from .features import featurize
-from .network import PommerNet
+from .network import PommerNet, build_net, load_weights
 
 
-def load_policy_net(path: str | Path, num_outputs: int = NUM_ACTIONS) -> PommerNet:
+def load_policy_net(path: str | Path, num_outputs: int = NUM_ACTIONS,
+                    radio: bool = False) -> PommerNet:
     """A policy network (dropout off, eval mode) from a state_dict file, with a clear error;
-    `num_outputs=1` reads a PPO value network."""
+    `num_outputs=1` reads a PPO value network. With `radio` it is a `RadioNet`, from a radio
+    state_dict or a Team one (whose move logits it then gives exactly: `network.load_weights`)."""
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"{path}: weights file not found")
@@ -51,11 +53,11 @@ def load_policy_net(path: str | Path, num_outputs: int = NUM_ACTIONS) -> PommerN
         state = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as exc:  # torch raises several types for corrupt or foreign files
         raise ValueError(f"{path}: not a readable weights file ({exc})") from None
-    net = PommerNet(num_outputs)
+    net = build_net(num_outputs, radio)
     try:
-        net.load_state_dict(state)
+        load_weights(net, state)
     except (RuntimeError, TypeError, AttributeError) as exc:
-        raise ValueError(f"{path}: weights do not fit PommerNet ({exc})") from None
+        raise ValueError(f"{path}: weights do not fit {type(net).__name__} ({exc})") from None
     return net.eval()
 
 
