@@ -58,11 +58,13 @@ def test_radio_net_learns_to_hear_and_speak_from_zero():
     torch.manual_seed(0)
     net = RadioNet()
     net.load_team_state(load_policy_net(resolve_policy("imitation").file("weights")).state_dict())
-    planes, message = _inputs()
+    net.convs.requires_grad_(False)  # the Team trunk stays; only the new maps learn
+    net.head.requires_grad_(False)
+    planes, message = _inputs(16)
     # target: say back the first word heard, as the first word
     target = message[:, 0].argmax(-1)
-    optimizer = torch.optim.Adam([net.hear.weight, *net.speak.parameters()], lr=0.02)
-    for _ in range(100):
+    optimizer = torch.optim.Adam([net.hear.weight, *net.speak.parameters()], lr=0.05)
+    for _ in range(30):
         loss = torch.nn.functional.cross_entropy(net(planes, message)[:, 6:14], target)
         optimizer.zero_grad()
         loss.backward()
