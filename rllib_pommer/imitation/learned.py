@@ -38,14 +38,15 @@ from ..agents.registry import (
 from ..game.constants import NUM_ACTIONS
 from ..game.observation import Observation
 from .features import featurize
-from .network import PommerNet, build_net, load_weights
+from .network import PommerNet, build_net, is_radio_state, load_weights
 
 
 def load_policy_net(path: str | Path, num_outputs: int = NUM_ACTIONS,
-                    radio: bool = False) -> PommerNet:
+                    radio: bool | None = None) -> PommerNet:
     """A policy network (dropout off, eval mode) from a state_dict file, with a clear error;
-    `num_outputs=1` reads a PPO value network. With `radio` it is a `RadioNet`, from a radio
-    state_dict or a Team one (whose move logits it then gives exactly: `network.load_weights`)."""
+    `num_outputs=1` reads a PPO value network. It is a `RadioNet` for a TeamRadio state_dict,
+    a `PommerNet` for a Team one; `radio=True` asks for a `RadioNet` from either (a Team net's
+    move logits exactly: `network.load_weights`), `radio=False` for a `PommerNet`."""
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"{path}: weights file not found")
@@ -53,7 +54,7 @@ def load_policy_net(path: str | Path, num_outputs: int = NUM_ACTIONS,
         state = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as exc:  # torch raises several types for corrupt or foreign files
         raise ValueError(f"{path}: not a readable weights file ({exc})") from None
-    net = build_net(num_outputs, radio)
+    net = build_net(num_outputs, is_radio_state(state) if radio is None else radio)
     try:
         load_weights(net, state)
     except (RuntimeError, TypeError, AttributeError) as exc:

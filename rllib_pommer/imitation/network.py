@@ -94,6 +94,11 @@ class RadioNet(PommerNet):
                                           if key in own}})
 
 
+def is_radio_state(state: dict) -> bool:
+    """Whether a state_dict is a `RadioNet`'s (it hears), not a Team `PommerNet`'s."""
+    return "hear.weight" in state
+
+
 def build_net(num_outputs: int = NUM_ACTIONS, radio: bool = False) -> PommerNet:
     """A policy (`num_outputs` 6) or value (1) network of the Team game, or with `radio` of
     TeamRadio, whose policy speaks (`RadioNet`); dropout off."""
@@ -105,7 +110,7 @@ def load_weights(net: PommerNet, state: dict) -> None:
     """`state` into `net`: a `RadioNet` takes a radio state_dict as is and a Team one through
     `load_team_state`, a `PommerNet` a Team one; anything else is torch's error naming the
     keys or shapes that do not fit."""
-    if isinstance(net, RadioNet) and "hear.weight" not in state:
+    if isinstance(net, RadioNet) and not is_radio_state(state):
         net.load_team_state(state)
     else:
         net.load_state_dict(state)

@@ -81,7 +81,8 @@ def test_radio_state_round_trips_and_a_team_net_refuses_it(tmp_path):
     torch.nn.init.normal_(net.speak.weight)
     path = tmp_path / "pi.pt"
     torch.save(net.state_dict(), path)
-    loaded = load_policy_net(path, radio=True)
+    loaded = load_policy_net(path)  # a radio file loads as a RadioNet
+    assert isinstance(loaded, RadioNet) and loaded.speak is not None
     planes, message = _inputs(8)
     with torch.no_grad():
         assert torch.equal(loaded(planes, message), net.eval()(planes, message))
@@ -89,7 +90,7 @@ def test_radio_state_round_trips_and_a_team_net_refuses_it(tmp_path):
         other = torch.roll(message, 1, dims=0)
         assert not torch.equal(loaded(planes, message)[:, :6], loaded(planes, other)[:, :6])
     with pytest.raises(ValueError, match=r"(?s)pi\.pt: weights do not fit PommerNet.*hear\.weight"):
-        load_policy_net(path)
+        load_policy_net(path, radio=False)
 
 
 def test_radio_value_net_hears_and_loads_a_team_value_net(tmp_path):
