@@ -1,21 +1,22 @@
 """`python -m rllib_pommer.evaluate --team A --vs B --games N`: the arena.
 
-Plays N Team games of policy A against policy B on all cores, half of them with A on seats {0, 2}
+Plays N Team games (`--variant radio`: TeamRadio, where policies named with the `_words` suffix
+send words) of policy A against policy B on all cores, half of them with A on seats {0, 2}
 and half on {1, 3} (`--fixed-seats`: always {0, 2}), and prints A's win/loss/tie rates with 95%
 Wilson intervals, the mean game length, A's agents lost to their own bombs, and per game who
 killed whom (each team's kills, suicides and team kills: `game/kills.py`). `--records FILE`
 writes one row per game (.jsonl or .csv) with the columns
 
     game, seed, seats_a, result (win/loss/tie for A), length, died, own_bomb_deaths, bombs_laid,
-    team, vs, filters, killers
+    team, vs, filters, killers, variant
 
 (died, own_bomb_deaths, bombs_laid and killers by seat 0..3; team, vs and filters name the match,
 so `python -m rllib_pommer.report` reads the file alone), from which every table can be
 recomputed.
 Same seed, same records.
 `--record K` also writes the first K games as replays in the reference's JSON Lines schema
-(`--replays FILE`, with every agent's observations if `--with-observations`), for
-`python -m rllib_pommer.replay render|html|verify`.
+(`--replays FILE`, with every agent's observations if `--with-observations`; TeamRadio replays
+keep every agent's words), for `python -m rllib_pommer.replay render|html|verify`.
 """
 
 from __future__ import annotations
@@ -57,7 +58,8 @@ def format_summary(spec: MatchSpec, summary: dict) -> str:
 
     return "\n".join([
         f"{spec.team}{'+' + '+'.join(spec.filters) if spec.filters else ''} vs {spec.vs}: "
-        f"{summary['games']} games, seed {spec.seed}",
+        f"{summary['games']} {'TeamRadio ' if spec.variant == 'radio' else ''}games, "
+        f"seed {spec.seed}",
         f"  win  {rate('win')}",
         f"  loss {rate('loss')}",
         f"  tie  {rate('tie')}",
@@ -80,6 +82,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--filters", type=_filters, default=(), help="e.g. jitter,action")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--fixed-seats", action="store_true", help="team A always on {0, 2}")
+    parser.add_argument("--variant", choices=("team", "radio"), default="team",
+                        help="the game: Team, or TeamRadio with words (default: %(default)s)")
     parser.add_argument("--workers", type=int, default=None, help="processes (default: cores)")
     parser.add_argument("--records", type=Path, help="per-game rows, .jsonl or .csv")
     parser.add_argument("--record", type=int, default=0, metavar="K",
@@ -93,7 +97,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         check_output(args.records, "--records")
         check_output(args.replays if args.record > 0 else None, "--replays")
-        spec = MatchSpec(args.team, args.vs, args.games, args.seed, args.filters, args.fixed_seats)
+        spec = MatchSpec(args.team, args.vs, args.games, args.seed, args.filters, args.fixed_seats,
+                         args.variant)
         start = time.perf_counter()
         with tqdm(total=spec.games, unit="game", file=sys.stderr, mininterval=1) as bar:
             records = play_match(spec, args.workers, bar.update)
@@ -119,7 +124,7 @@ def main(argv: list[str] | None = None) -> int:
         failed = 2
     if args.json:
         print(json.dumps({"team": spec.team, "vs": spec.vs, "filters": list(spec.filters),
-                          "seed": spec.seed, **summary}))
+                          "seed": spec.seed, "variant": spec.variant, **summary}))
     return failed
 
 

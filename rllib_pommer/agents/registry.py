@@ -13,6 +13,8 @@ Names follow the paper's table: `X_jitter`, `X_action` and `X_jitter_action` are
 Jitter Correction, the Action Filter, or both. The wrappers are always stacked in the order of
 `FILTERS`, jitter inside and action filter outside: the safety veto must have the last word, also
 over the SimpleAgent moves that jitter correction injects (SimpleAgent walks into blasts too).
+A last suffix `_words` (`simple_words`, `X_action_words`) makes the agent speak in TeamRadio games
+(`speaker.Speaker`: seeded random words beside unchanged moves); without it agents are silent.
 
 The folder is the repository's `policies/` (a wheel's copy of it), or the directory named by
 RLLIB_POMMER_POLICIES: `shipped.data_dir` finds it from any working directory.
@@ -34,6 +36,7 @@ from .base import Agent
 from .http_agent import HttpAgent
 from .jitter import JitterCorrection
 from .scripted import RULES
+from .speaker import Speaker
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -53,6 +56,7 @@ FILTER_SUFFIXES = {
     "_action": ("action",),
     "_jitter": ("jitter",),
 }
+WORDS_SUFFIX = "_words"  # after any filter suffix: the agent speaks (TeamRadio)
 
 
 @dataclass(frozen=True)
@@ -65,6 +69,7 @@ class PolicySpec:
     path: Path
     params: Mapping[str, Any] = field(default_factory=dict)
     filters: tuple[str, ...] = ()
+    words: bool = False  # the name ends in WORDS_SUFFIX: the agent speaks
 
     def file(self, key: str) -> Path:
         """The absolute path that key `key` names, relative to the policy file (a learned
@@ -190,23 +195,29 @@ def resolve_policy(name_or_path: str | os.PathLike) -> PolicySpec:
         return _load_spec(path, ())
     name = str(name_or_path)
     folder = policies_dir()
-    candidates = [(name, ())] + [
-        (name[: -len(suffix)], filters)
-        for suffix, filters in FILTER_SUFFIXES.items()
-        if name.endswith(suffix)
-    ]
-    for base, filters in candidates:
-        path = folder / f"{base}.toml"
-        if base and path.is_file():
-            return _load_spec(path, filters)
+    stems = [(name, False)]
+    if name.endswith(WORDS_SUFFIX):
+        stems.append((name[: -len(WORDS_SUFFIX)], True))
+    for stem, words in stems:
+        candidates = [(stem, ())] + [
+            (stem[: -len(suffix)], filters)
+            for suffix, filters in FILTER_SUFFIXES.items()
+            if stem.endswith(suffix)
+        ]
+        for base, filters in candidates:
+            path = folder / f"{base}.toml"
+            if base and path.is_file():
+                return replace(_load_spec(path, filters), words=words)
     raise ValueError(
         f"unknown policy {name!r}; valid: {policy_names()} (in {folder}), each optionally "
-        f"suffixed with {sorted(FILTER_SUFFIXES)}, or a path to a .toml policy file"
+        f"suffixed with {sorted(FILTER_SUFFIXES)} and then {WORDS_SUFFIX!r}, or a path to a "
+        ".toml policy file"
     )
 
 
 def make_agent(name_or_path: str | os.PathLike, filters: Iterable[str] = ()) -> Agent:
-    """A fresh agent for a policy, wrapped in its name's filters and in `filters`."""
+    """A fresh agent for a policy, wrapped in its name's filters and in `filters`, and in a
+    `Speaker` (outermost) if its name ends in `_words`."""
     if isinstance(filters, str):
         filters = (filters,)
     unknown = sorted(set(filters) - set(FILTERS))
@@ -218,4 +229,4 @@ def make_agent(name_or_path: str | os.PathLike, filters: Iterable[str] = ()) -> 
     for filter_name, wrapper in FILTERS.items():
         if filter_name in wanted:
             agent = wrapper(agent)
-    return agent
+    return Speaker(agent) if spec.words else agent

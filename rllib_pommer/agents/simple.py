@@ -18,7 +18,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from ..game.constants import ACTION_DC, ACTION_DR, NUM_ACTIONS, Action, GameType, Item
+from ..game.constants import ACTION_DC, ACTION_DR, NUM_ACTIONS, Action, GameType, Item, has_teams
 from ..game.observation import Observation
 from .rng import next_below, next_u64, next_uniform, seed_states
 
@@ -33,6 +33,7 @@ PASSAGE, RIGID, WOOD, FLAMES, FOG = (
 EXTRA_BOMB, INCR_RANGE, KICK = int(Item.EXTRA_BOMB), int(Item.INCR_RANGE), int(Item.KICK)
 AGENT_DUMMY, AGENT0 = int(Item.AGENT_DUMMY), int(Item.AGENT0)
 TEAM_GAME = int(GameType.TEAM)
+_has_teams = njit(inline="always")(has_teams)
 
 # Direction orders of the different routines (docs/rules.md §8 item 17).
 NEIGHBOUR_ORDER = np.array([UP, DOWN, LEFT, RIGHT], np.int64)
@@ -78,12 +79,13 @@ def _passable(value: int, is_enemy: np.ndarray) -> bool:
 def _enemy_mask(agent_id: int, game_type: int) -> np.ndarray:
     """is_enemy[code] for every uint8 code, the enemies being those of `constants.enemies_of`."""
     is_enemy = np.zeros(256, np.bool_)
+    teams = _has_teams(game_type)
     for other in range(4):
-        if game_type == TEAM_GAME:
+        if teams:
             is_enemy[AGENT0 + other] = other % 2 != agent_id % 2
         else:
             is_enemy[AGENT0 + other] = other != agent_id
-    is_enemy[AGENT_DUMMY] = game_type == TEAM_GAME
+    is_enemy[AGENT_DUMMY] = teams
     return is_enemy
 
 

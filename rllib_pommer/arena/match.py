@@ -1,5 +1,5 @@
-"""Matches between two named policies in Team games, played in worker processes: one
-`records.GameRecord` per game, and the replays of chosen games.
+"""Matches between two named policies in Team (or TeamRadio) games, played in worker processes:
+one `records.GameRecord` per game, and the replays of chosen games.
 
 Every game draws its board and all agents' random streams from (seed, game index) by the rule of
 `game/seeding.py`, so a match gives the same records whatever the number of worker processes or
@@ -7,6 +7,9 @@ their scheduling.
 Team A sits on seats {0, 2} in even games and {1, 3} in odd ones (the reference shows a seat
 effect: the SimpleAgent mirror wins 50.6% from {0, 2} against 34.6% from {1, 3}), unless seats are
 fixed.
+In TeamRadio games (`MatchSpec.variant` "radio") every agent sends words with its move, silence
+(0, 0) unless it speaks (`agents/speaker.py`); replays record a speaker's `[move, word, word]`
+and a silent or dead agent's plain move, as the reference's runner does.
 """
 
 from __future__ import annotations
@@ -22,8 +25,9 @@ import torch
 from ..agents.base import innermost
 from ..agents.http_agent import HttpAgent
 from ..agents.registry import make_agent
+from ..agents.speaker import Speaker, words_of
 from ..game.blast import mark_blast
-from ..game.constants import TEAM_PRESET, Action
+from ..game.constants import RADIO_NUM_WORDS, Action, GameConfig, has_radio, has_teams, preset
 from ..game.engine import Games
 from ..game.kills import killer_seats
 from ..game.records import GameRecorder
@@ -49,7 +53,8 @@ SEATS_A = ((0, 2), (1, 3))
 
 @dataclass(frozen=True)
 class MatchSpec:
-    """Team A (`team`) against team B (`vs`); filters apply to team A's agents only."""
+    """Team A (`team`) against team B (`vs`) in games of the preset `variant` ("team" or
+    "radio"); filters apply to team A's agents only."""
 
     team: str
     vs: str
@@ -57,10 +62,18 @@ class MatchSpec:
     seed: int = 0
     filters: tuple[str, ...] = ()
     fixed_seats: bool = False
+    variant: str = "team"
 
     def __post_init__(self):
         if self.games <= 0:
             raise ValueError(f"games must be a positive number, got {self.games}")
+        if not has_teams(self.config.game_type):
+            raise ValueError(f"variant {self.variant!r}: the arena plays team games, "
+                             f"'team' or 'radio'")
+
+    @property
+    def config(self) -> GameConfig:
+        return preset(self.variant)
 
 
 def seats_of_team_a(spec: MatchSpec, game: int) -> tuple[int, int]:
@@ -150,13 +163,15 @@ def _play_chunk(spec: MatchSpec, games: Sequence[int],
     torch_threads_for_workers()
     n = len(games)
     seeds = [game_seeds(spec.seed, g) for g in games]
-    engine = Games(n, TEAM_PRESET)
+    config = spec.config
+    radio = has_radio(config.game_type)
+    engine = Games(n, config)
     engine.reset([board_seed for board_seed, _ in seeds])
     players = []
     for i, g in enumerate(games):
         agents = _build_players(spec, seats_of_team_a(spec, g))
         for seat, agent in enumerate(agents):
-            agent.reset(seat, int(TEAM_PRESET.game_type), seeds[i][1][seat])
+            agent.reset(seat, int(config.game_type), seeds[i][1][seat])
         players.append(agents)
     recorders = {}
     if replay_observations is not None:
@@ -174,15 +189,19 @@ def _play_chunk(spec: MatchSpec, games: Sequence[int],
         obs = engine.obs
         _prefetch_learned(players, obs, active)
         actions = np.zeros((n, 4), np.int64)
+        words = np.zeros((n, 4, RADIO_NUM_WORDS), np.int64)
         for g, s in zip(*np.nonzero(active), strict=True):
             actions[g, s] = players[g][s].act(obs.select(g, s))
+            if radio:
+                words[g, s] = words_of(players[g][s])
         was_done = engine.done.copy()
         kept = stats.before_step(state, active, actions)
-        engine.step(actions)
+        engine.step(np.concatenate([actions[..., None], words], axis=-1) if radio else actions)
         stats.after_step(state, active, kept)
         for i, recorder in recorders.items():
             if not was_done[i]:
-                recorder.step(actions[i])
+                recorder.step(_as_passed(players[i], active[i], actions[i], words[i]) if radio
+                              else actions[i])
     records = []
     for i, g in enumerate(games):
         seats_a = seats_of_team_a(spec, g)
@@ -192,8 +211,16 @@ def _play_chunk(spec: MatchSpec, games: Sequence[int],
             g, spec.seed, list(seats_a), result, int(stats.length[i]),
             (state.agents[i, :, A_ALIVE] == 0).tolist(), stats.own_bomb_deaths[i].tolist(),
             stats.bombs_laid[i].tolist(), spec.team, spec.vs, list(spec.filters),
-            [killer_seats(mask) for mask in engine.killers[i]]))
+            [killer_seats(mask) for mask in engine.killers[i]], spec.variant))
     return records, [recorders[i].finish() for i in sorted(recorders)]
+
+
+def _as_passed(players: list, active: np.ndarray, moves: np.ndarray, words: np.ndarray) -> list:
+    """One radio game's actions as the reference's runner passes them: a speaker's
+    [move, word, word], a silent or dead agent's plain move."""
+    return [[int(moves[s]), *map(int, words[s])]
+            if active[s] and isinstance(players[s], Speaker) else int(moves[s])
+            for s in range(len(players))]
 
 
 def _agent_mix(spec: MatchSpec, game: int) -> str:

@@ -36,6 +36,8 @@ class GameRecord:
     # By seat, the seats whose fire it died in (game/kills.py); [] for the living. None in
     # records written before the engine credited kills.
     killers: list[list[int]] | None = None
+    # The game's preset: "team", or "radio" (TeamRadio, docs/rules.md §10).
+    variant: str = "team"
 
     def kill_counts(self) -> dict[str, int] | None:
         """Per team ("a", "b"): enemies it killed, its own agents' suicides (an own bomb among

@@ -1,6 +1,6 @@
 // Shared by the replay viewer and the play page (inlined by rllib_pommer/viz/page.py): the board
 // is blitted from the tile sheet, one encoded string per board (see page.py), and the agents'
-// table is filled from [alive, ammo, blast, kick] rows.
+// table is filled from [alive, ammo, blast, kick] rows (and in TeamRadio each agent's words).
 "use strict";
 
 function pommerBoard(canvas, assets) {
@@ -32,8 +32,8 @@ function pommerBoard(canvas, assets) {
 }
 
 // One row per agent: id with its team colour, then `players[id]` if given, state, ammo, blast,
-// kick and the action it last played.
-function fillAgentTable(tbody, assets, agents, actions, players) {
+// kick, the action it last played and, if `words` is given (TeamRadio), the words it last sent.
+function fillAgentTable(tbody, assets, agents, actions, players, words) {
   tbody.innerHTML = "";
   agents.forEach(([alive, ammo, blast, kick], id) => {
     const row = document.createElement("tr");
@@ -45,7 +45,8 @@ function fillAgentTable(tbody, assets, agents, actions, players) {
     first.append(dot, String(id));
     row.append(first);
     for (const text of [...(players ? [players[id]] : []), alive ? "alive" : "dead", ammo, blast,
-                        kick ? "yes" : "", actions ? actions[id] : ""]) {
+                        kick ? "yes" : "", actions ? actions[id] : "",
+                        ...(words ? [words[id].join(" ")] : [])]) {
       const cell = document.createElement("td");
       cell.textContent = text;
       row.append(cell);

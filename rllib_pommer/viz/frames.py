@@ -27,6 +27,7 @@ class Frame:
     bomb_life: np.ndarray  # (S, S) ticks left of the bomb on each visible cell, 0 where none
     agents: list[dict]  # the state's agent dicts (position, is_alive, ammo, ...)
     viewer: int | None = None
+    words: list[list[int]] | None = None  # TeamRadio: each agent's last [word, word]
 
 
 def load_game(path: str | Path, index: int = 0) -> dict:
@@ -60,7 +61,7 @@ def _bomb_life(state: dict) -> np.ndarray:
 def state_frame(state: dict) -> Frame:
     """The whole board of one state (the reference schema, e.g. `Game.dump()` of a live game)."""
     return Frame(state["step_count"], np.asarray(state["board"]), _bomb_life(state),
-                 state["agents"])
+                 state["agents"], words=state.get("radio_from_agent"))
 
 
 def _recorded_views(record: dict, viewer: int) -> list[tuple[np.ndarray, np.ndarray]] | None:
@@ -88,5 +89,5 @@ def frames(record: dict, viewer: int | None = None) -> list[Frame]:
     if not 0 <= viewer < NUM_AGENTS:
         raise ValueError(f"fog: agent {viewer} is not one of 0..{NUM_AGENTS - 1}")
     views = _recorded_views(record, viewer) or _derived_views(record, viewer)
-    return [Frame(s["step_count"], board, life, s["agents"], viewer)
+    return [Frame(s["step_count"], board, life, s["agents"], viewer, s.get("radio_from_agent"))
             for s, (board, life) in zip(states, views, strict=True)]

@@ -1,7 +1,7 @@
 """Pillow pictures of a recorded game: one step as a PNG, or every step as an animated GIF.
 
-Each picture is a header (step, whose view, every agent's ammo, blast strength, kick or death)
-above the board composed from the shared tiles.
+Each picture is a header (step, whose view, every agent's ammo, blast strength, kick or death, and
+in TeamRadio the words it sent last) above the board composed from the shared tiles.
 """
 
 from __future__ import annotations
@@ -19,11 +19,13 @@ HEADER_TEXT = (236, 236, 236)
 HEADER_CELLS = 1.7  # header height in cells: a title line and two lines of agents
 
 
-def _agent_line(agent: dict) -> str:
+def agent_line(agent: dict, words: list[int] | None = None) -> str:
+    """An agent's header text; `words`, in TeamRadio, the pair it sent in the frame's step."""
+    said = f"  says {words[0]} {words[1]}" if words is not None else ""
     if not agent["is_alive"]:
-        return "dead"
+        return "dead" + said
     kick = "  kick" if agent["can_kick"] else ""
-    return f"ammo {agent['ammo']}  blast {agent['blast_strength']}{kick}"
+    return f"ammo {agent['ammo']}  blast {agent['blast_strength']}{kick}{said}"
 
 
 def _draw_header(image: Image.Image, frame: Frame, last_step: int, cell: int) -> None:
@@ -40,8 +42,9 @@ def _draw_header(image: Image.Image, frame: Frame, last_step: int, cell: int) ->
         x, y = pad + (i % 2) * image.width // 2, pad + line * (1 + i // 2)
         image.alpha_composite(tiles(icon)[f"{'agent' if agent['is_alive'] else 'dead'}{i}"],
                               (x, y))
-        draw.text((x + icon + pad // 2, y + icon // 2), _agent_line(agent), fill=HEADER_TEXT,
-                  font=text_font, anchor="lm")
+        words = frame.words[i] if frame.words is not None else None
+        draw.text((x + icon + pad // 2, y + icon // 2), agent_line(agent, words),
+                  fill=HEADER_TEXT, font=text_font, anchor="lm")
 
 
 def draw_frame(frame: Frame, last_step: int, cell: int = DEFAULT_CELL) -> Image.Image:

@@ -41,6 +41,8 @@ def viewer_data(record: dict, cell: int = DEFAULT_CELL) -> dict:
         "steps": [f.step for f in full],
         "agents": [agent_stats(f.agents) for f in full],
         "actions": [None] + [action_labels(s["actions"]) for s in record["steps"]],
+        # TeamRadio: per frame, each agent's last [word, word]; None in the other games
+        "words": [f.words for f in full] if full[0].words is not None else None,
         "views": [{"id": "full", "label": "full board", "cells": encode_view(full)}]
         + [{"id": str(a), "label": f"as agent {a} sees it", "cells": encode_view(frames(record, a))}
            for a in range(NUM_AGENTS)],

@@ -46,6 +46,9 @@ def test_every_shipped_policy_builds_an_agent():
         ("simple_jitter_action", ["ActionFilter", "JitterCorrection", "SimpleAgent"]),
         ("simple_nobomb_action", ["ActionFilter", "SimpleAgentNoBomb"]),
         ("static_jitter", ["JitterCorrection", "StaticAgent"]),
+        ("simple_words", ["Speaker", "SimpleAgent"]),
+        ("simple_jitter_action_words", ["Speaker", "ActionFilter", "JitterCorrection",
+                                        "SimpleAgent"]),
     ],
 )
 def test_suffixes_add_the_wrappers(name, expected):
@@ -75,6 +78,10 @@ def test_unknown_policy_lists_the_valid_names():
     assert "_jitter_action" in str(info.value)
     with pytest.raises(ValueError, match="unknown policy"):
         resolve_policy("simple_action_jitter")
+    with pytest.raises(ValueError, match="unknown policy 'simple_words_action'.*'_words'"):
+        resolve_policy("simple_words_action")
+    assert resolve_policy("simple_action_words").words
+    assert not resolve_policy("simple_action").words
 
 
 def test_unknown_filter_lists_the_valid_ones():

@@ -56,7 +56,9 @@ def test_cli_prints_summary_and_writes_records(tmp_path, capsys):
     rows = [json.loads(line) for line in jsonl.read_text().splitlines()]
     assert [r["game"] for r in rows] == [0, 1, 2, 3]
     assert set(rows[0]) == {"game", "seed", "seats_a", "result", "length", "died",
-                            "own_bomb_deaths", "bombs_laid", "team", "vs", "filters", "killers"}
+                            "own_bomb_deaths", "bombs_laid", "team", "vs", "filters", "killers",
+                            "variant"}
+    assert rows[0]["variant"] == "team"
     assert (rows[0]["team"], rows[0]["vs"], rows[0]["filters"]) == ("simple", "static", [])
     assert main([*args, "--records", str(table)]) == 0
     with open(table) as f:
@@ -77,6 +79,41 @@ def test_recorded_replays_are_the_played_games_and_verify(tmp_path, capsys):
     capsys.readouterr()
     assert replay_main(["verify", str(replays)]) == 0
     assert capsys.readouterr().out.strip().endswith("0 mismatches")
+
+
+def test_radio_matches_play_the_team_games_and_replays_keep_the_words(tmp_path, capsys):
+    """Words change no game: SimpleAgents (speaking or not) play TeamRadio exactly as Team. The
+    replays record a speaker's [move, word, word], a silent or dead agent's plain move, and
+    verify."""
+    team = play_match(MatchSpec("simple", "simple", 4, seed=2), workers=1)
+    radio = play_match(MatchSpec("simple_words", "simple", 4, seed=2, variant="radio"),
+                       workers=1)
+    assert [r.variant for r in radio] == ["radio"] * 4
+    assert [{**vars(r), "variant": "", "team": ""} for r in radio] == [
+        {**vars(r), "variant": "", "team": ""} for r in team]
+    replays = tmp_path / "radio.jsonl.gz"
+    args = ["--team", "simple_words", "--vs", "static", "--games", "2", "--seed", "4",
+            "--workers", "1", "--variant", "radio", "--record", "2", "--replays", str(replays),
+            "--with-observations"]
+    assert main(args) == 0
+    assert "2 TeamRadio games" in capsys.readouterr().out
+    games = list(read_games(replays))
+    assert {g["env_id"] for g in games} == {"PommeRadioCompetition-v2"}
+    for game in games:
+        states = [game["initial_state"]] + [step["state"] for step in game["steps"]]
+        for before, step in zip(states, game["steps"], strict=False):
+            speaks = [seat in game["seats_a"] and before["agents"][seat]["is_alive"]
+                      for seat in range(4)]
+            assert [isinstance(a, list) for a in step["full_actions"]] == speaks
+            heard = [step["full_actions"][(a + 2) % 4] for a in range(4)]
+            assert [o["message"] for o in step["observations"]] == [
+                w[1:] if isinstance(w, list) else [0, 0] for w in heard]
+    assert replay_main(["verify", str(replays)]) == 0
+    assert capsys.readouterr().out.strip().endswith("0 mismatches")
+    with pytest.raises(ValueError, match="the arena plays team games"):
+        MatchSpec("simple", "simple", 1, variant="ffa")
+    with pytest.raises(ValueError, match="unknown game preset 'radi'"):
+        MatchSpec("simple", "simple", 1, variant="radi")
 
 
 def _exit_code(args) -> int:

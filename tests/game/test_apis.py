@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
-from rllib_pommer.game.constants import TEAM_PRESET
+from rllib_pommer.game.constants import RADIO_PRESET, TEAM_PRESET
 from rllib_pommer.game.engine import Game, Games
 from rllib_pommer.game.records import GameRecorder, read_games, write_games
 from rllib_pommer.game.state import A_AMMO, A_KICK
@@ -18,15 +19,20 @@ def _power_start(state):
     state.agents[:, :, A_AMMO] = 3
 
 
-def test_single_and_batched_apis_agree_step_by_step():
+@pytest.mark.parametrize("config", [TEAM_PRESET, RADIO_PRESET], ids=["team", "radio"])
+def test_single_and_batched_apis_agree_step_by_step(config):
+    """Also in TeamRadio, where the batch gets (N, 4, 3) arrays and each game four
+    [move, word, word] lists; the states compared include the words."""
     rng = np.random.default_rng(0)
     seeds = rng.integers(0, 2**31, N)
     actions = rng.choice([0, 1, 2, 3, 4, 5, 5], size=(400, N, 4))
-    batch = Games(N, TEAM_PRESET)
+    if config is RADIO_PRESET:
+        actions = np.concatenate([actions[..., None], rng.integers(0, 8, (400, N, 4, 2))], -1)
+    batch = Games(N, config)
     batch.reset(seeds)
     _power_start(batch.state)
     batch.observe()
-    singles = [Game(TEAM_PRESET) for _ in range(N)]
+    singles = [Game(config) for _ in range(N)]
     for n, game in enumerate(singles):
         game.reset(int(seeds[n]))
         _power_start(game.state)
@@ -36,7 +42,7 @@ def test_single_and_batched_apis_agree_step_by_step():
         for n, game in enumerate(singles):
             if was_done[n]:
                 continue
-            s_obs, s_rewards, s_done, _ = game.step(actions[t, n])
+            s_obs, s_rewards, s_done, _ = game.step(actions[t, n].tolist())
             for batched_field, single_field in zip(batch.state, game.state, strict=True):
                 assert np.array_equal(batched_field[n], single_field[0])
             for batched_field, single_field in zip(obs, s_obs, strict=True):

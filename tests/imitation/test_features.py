@@ -85,3 +85,10 @@ def test_batched_rows_equal_single_observations_and_the_network_takes_them():
     assert logits.shape == (12, 6)
     assert PommerNet(1)(torch.from_numpy(batch)).shape == (12, 1)
     assert sum(p.numel() for p in PommerNet().parameters()) < 5e6 / 4  # weights under 5 MB
+
+
+def test_teamradio_observations_give_the_team_planes():
+    """TeamRadio (game type 3) has Team's teammate and enemies, so the same planes."""
+    radio = featurize(_observation(game_type=GameType.TEAM_RADIO))
+    np.testing.assert_array_equal(radio, featurize(_observation()))
+    assert radio[10, 3, 3] == 1 and radio[11, 4, 4] == 1  # teammate, first enemy

@@ -11,8 +11,9 @@ from PIL import Image
 from rllib_pommer.game.constants import Item
 from rllib_pommer.replay import main as replay_main
 from rllib_pommer.viz.frames import frames, game_states, load_game
-from rllib_pommer.viz.render import DEFAULT_CELL, board_origin, render_game
+from rllib_pommer.viz.render import DEFAULT_CELL, agent_line, board_origin, render_game
 from rllib_pommer.viz.tiles import COLOURS, PROBE, agent_colour, faded
+from rllib_pommer.viz.viewer import viewer_data
 
 
 def probe(image: Image.Image, r: int, c: int, cell: int = DEFAULT_CELL) -> np.ndarray:
@@ -111,3 +112,33 @@ def test_replay_cli_explains_bad_requests(replay_file, tmp_path, capsys, args, m
     args = [a.replace("x.", str(tmp_path / "x.")) for a in args]
     assert replay_main(["render", str(replay_file), *args]) == 2
     assert message in capsys.readouterr().err
+
+
+def test_radio_pictures_show_each_agents_last_words(radio_games, tmp_path):
+    """The header of a TeamRadio frame says the words each agent sent in that step; the board
+    is drawn exactly as without them."""
+    record = load_game(radio_games, 0)
+    states = game_states(record)
+    step = next(t for t, s in enumerate(states) if any(map(any, s["radio_from_agent"])))
+    words = states[step]["radio_from_agent"]
+    assert frames(record)[step].words == words == frames(record, 1)[step].words
+    agent = states[step]["agents"][0]
+    assert agent_line(agent, words[0]).endswith(f"says {words[0][0]} {words[0][1]}")
+    assert "says" not in agent_line(agent)
+    silent = copy.deepcopy(record)
+    for state in game_states(silent):
+        del state["radio_from_agent"]
+    with_words, without = tmp_path / "words.png", tmp_path / "silent.png"
+    render_game(record, with_words, step=step)
+    render_game(silent, without, step=step)
+    header = board_origin()[1]
+    spoken, plain = np.asarray(Image.open(with_words)), np.asarray(Image.open(without))
+    assert not np.array_equal(spoken[:header], plain[:header])
+    np.testing.assert_array_equal(spoken[header:], plain[header:])
+
+
+def test_the_viewer_gets_the_words_of_radio_games_only(radio_games, game_record):
+    record = load_game(radio_games, 2)
+    data = viewer_data(record)
+    assert data["words"] == [s["radio_from_agent"] for s in game_states(record)]
+    assert viewer_data(game_record)["words"] is None

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from rllib_pommer.game.constants import Item
-from rllib_pommer.viz.frames import frames, game_states
+from rllib_pommer.viz.frames import frames, game_states, load_game
 from rllib_pommer.viz.render import DEFAULT_CELL
 from rllib_pommer.viz.tiles import BASE_TILE, COLOURS, PROBE, agent_colour, cell_layers
 from rllib_pommer.viz.viewer import write_viewer
@@ -93,3 +93,20 @@ def test_viewer_steps_draws_the_state_and_fogs(game_record, tmp_path):
 
         fetched = browser.requested_urls()
     assert fetched and all(url.startswith(("file:", "data:")) for url in fetched), fetched
+
+
+def test_radio_viewer_shows_each_agents_last_words(radio_games, tmp_path):
+    record = load_game(radio_games, 0)
+    states = game_states(record)
+    html = tmp_path / "radio.html"
+    write_viewer(record, html)
+    with Browser(CHROMIUM) as browser:
+        page = browser.open(html.as_uri())
+        page.wait_for("window.pommerViewer && window.pommerViewer.ready")
+        heads = "[...document.querySelectorAll('#agents-head th')].map(th => th.textContent)"
+        assert page.evaluate(heads)[-1] == "words"
+        for _ in range(4):
+            click(page, "next")
+        cells = page.evaluate("[...document.querySelectorAll('#agents tr')]"
+                              ".map(tr => tr.lastElementChild.textContent)")
+    assert cells == [f"{w1} {w2}" for w1, w2 in states[4]["radio_from_agent"]]
