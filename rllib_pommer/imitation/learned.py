@@ -35,10 +35,10 @@ from ..agents.registry import (
     registered,
     resolve_policy,
 )
-from ..game.constants import NUM_ACTIONS
+from ..game.constants import NUM_ACTIONS, RADIO_NUM_WORDS
 from ..game.observation import Observation
-from .features import featurize
-from .network import PommerNet, build_net, is_radio_state, load_weights
+from .features import featurize, message_features
+from .network import PommerNet, RadioNet, build_net, is_radio_state, load_weights
 
 
 def load_policy_net(path: str | Path, num_outputs: int = NUM_ACTIONS,
@@ -73,8 +73,15 @@ class LearnedPolicy:
 
     @torch.no_grad()
     def probabilities(self, obs: Observation) -> np.ndarray:
-        """Action probabilities (B, 6) for observations with leading shape (B,)."""
-        logits = self.net(torch.from_numpy(featurize(obs)))
+        """Action probabilities (B, 6) for observations with leading shape (B,). A TeamRadio
+        network (`RadioNet`) plays its moves alone here, hearing silence: the Agent protocol
+        hands agents no message and takes no words from them."""
+        planes = torch.from_numpy(featurize(obs))
+        if isinstance(self.net, RadioNet):
+            silence = message_features(np.zeros((len(planes), RADIO_NUM_WORDS), np.int64))
+            logits = self.net(planes, torch.from_numpy(silence))[:, :NUM_ACTIONS]
+        else:
+            logits = self.net(planes)
         return torch.softmax(logits, dim=-1).numpy().astype(np.float64)
 
     def choose(self, probs: np.ndarray, rngs: Sequence[np.random.Generator]) -> np.ndarray:

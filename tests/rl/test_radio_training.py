@@ -1,0 +1,188 @@
+"""TeamRadio through RLlib: the radio smoke curriculum trains in-process (the learner speaks and
+hears, starting from Team weights with the Team move logits exactly), the filters act on the
+move alone, words reach the teammate, and the checkpoint plays in the arena; the curriculum key
+`game` is checked."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+from ray.tune.registry import register_env
+
+from rllib_pommer.arena.match import MatchSpec, play_match
+from rllib_pommer.envs.team import RADIO_ACTION_SPACE
+from rllib_pommer.imitation.features import message_features
+from rllib_pommer.imitation.learned import load_policy_net
+from rllib_pommer.imitation.network import RadioNet
+from rllib_pommer.rl.checkpoint_policy import load_checkpoint_net
+from rllib_pommer.rl.config import build_config
+from rllib_pommer.rl.curriculum import load_curriculum
+from rllib_pommer.rl.env import PommeEnv
+from rllib_pommer.rl.rl_module import LEARNER
+
+RADIO_ECHO_ENV = "pommerman_radio_echo"
+
+
+class RadioEchoEnv(PommeEnv):
+    """Reports in each info the action the env executed for that agent on the step."""
+
+    def step(self, action_dict):
+        out = super().step(action_dict)
+        for agent, info in out[4].items():
+            info["executed"] = np.atleast_1d(action_dict[agent]).tolist()
+        return out
+
+
+register_env(RADIO_ECHO_ENV, RadioEchoEnv)
+
+
+def _snapshot(module):
+    return {k: v.detach().clone() for k, v in module.state_dict().items()}
+
+
+def _changed(before, after):
+    return any(not torch.equal(before[k], after[k]) for k in before)
+
+
+@pytest.fixture(scope="module")
+def radio_smoke(ray_session, pi_weights, tmp_path_factory):
+    curriculum = load_curriculum("radio_smoke")
+    config = build_config(curriculum, pi_weights=pi_weights, env=RADIO_ECHO_ENV)
+    algo = config.build_algo()
+    learner = algo.learner_group._learner.module[LEARNER]
+    start = {"pi": _snapshot(learner.pi), "radio": learner.radio,
+             "space": learner.action_space}
+    iterations = []
+    stage = 0
+    while True:
+        pi, vf = _snapshot(learner.pi), _snapshot(learner.vf)
+        result = algo.train()
+        iterations.append({"stage": stage, "pi_changed": _changed(pi, _snapshot(learner.pi)),
+                           "vf_changed": _changed(vf, _snapshot(learner.vf)), "result": result})
+        stage = result["curriculum"]["stage"]
+        if result["curriculum"]["episodes"] >= curriculum.total_episodes:
+            break
+    episodes = algo.env_runner.sample(num_timesteps=300, explore=True)
+    checkpoint = algo.save(str(tmp_path_factory.mktemp("radio_ckpt"))).checkpoint.path
+    trained = {"pi": _snapshot(learner.pi), "vf": _snapshot(learner.vf)}
+    algo.stop()
+    yield {"config": config, "start": start, "iterations": iterations, "episodes": episodes,
+           "checkpoint": checkpoint, "trained": trained, "curriculum": curriculum}
+
+
+def test_the_learner_starts_as_the_team_net_and_speaks_uniformly(radio_smoke, pi_weights):
+    start = radio_smoke["start"]
+    assert start["radio"] and start["space"] == RADIO_ACTION_SPACE
+    net = RadioNet()
+    net.load_state_dict(start["pi"])
+    team = load_policy_net(pi_weights)
+    planes = (torch.rand(16, 19, 11, 11, generator=torch.Generator().manual_seed(1)) < 0.2)
+    heard = torch.from_numpy(message_features(np.random.default_rng(1).integers(0, 8, (16, 2))))
+    with torch.no_grad():
+        out = net.eval()(planes.float(), heard)
+        assert torch.equal(out[:, :6], team(planes.float()))
+    assert torch.equal(out[:, 6:], torch.zeros(16, 16))
+
+
+def test_radio_stages_freeze_then_train_every_part(radio_smoke):
+    iterations = radio_smoke["iterations"]
+    assert [it["stage"] for it in iterations][::len(iterations) - 1] == [0, 1]
+    for it in iterations:
+        assert it["vf_changed"]
+        assert it["pi_changed"] == (it["stage"] == 1), "pi must move only after the warm-up"
+        assert it["result"]["learners"][LEARNER]["nonfinite_updates_skipped"] == 0
+    trained, start = radio_smoke["trained"], radio_smoke["start"]["pi"]
+    # the value net learned to hear; pi learned to hear and to speak after the warm-up
+    assert trained["vf"]["hear.weight"].abs().sum() > 0
+    for key in ("hear.weight", "speak.weight", "speak.bias"):
+        assert not torch.equal(trained["pi"][key], start[key]), key
+    shares = [it["result"]["env_runners"].get("learner_override_share", 0) for it in iterations]
+    assert max(shares) > 0, "the filters never overrode a move"
+
+
+def _log_softmax(x):
+    x = np.asarray(x, np.float64)
+    x = x - x.max(-1, keepdims=True)
+    return x - np.log(np.exp(x).sum(-1, keepdims=True))
+
+
+def test_the_stored_action_is_the_executed_one_with_its_logp(radio_smoke):
+    checked = 0
+    for episode in radio_smoke["episodes"]:
+        for agent_episode in episode.agent_episodes.values():
+            if agent_episode.module_id != LEARNER or len(agent_episode) == 0:
+                continue
+            actions = np.asarray(agent_episode.get_actions())
+            assert actions.shape[1:] == (3,)
+            executed = [info["executed"] for info in agent_episode.get_infos()[1:]]
+            assert actions.tolist() == executed
+            logits = np.asarray(agent_episode.get_extra_model_outputs("action_dist_inputs"))
+            rows = np.arange(len(actions))
+            expected = sum(_log_softmax(part)[rows, actions[:, i]]
+                           for i, part in enumerate(np.split(logits, [6, 14], axis=-1)))
+            logp = np.asarray(agent_episode.get_extra_model_outputs("action_logp"))
+            np.testing.assert_allclose(logp, expected, atol=1e-4)
+            checked += len(actions)
+    assert checked > 50
+
+
+def test_the_learners_words_reach_its_teammate(radio_smoke):
+    checked = 0
+    for episode in radio_smoke["episodes"]:
+        seats = {a: e for a, e in episode.agent_episodes.items() if e.module_id == LEARNER}
+        for seat, own in seats.items():
+            mate = seats.get((seat + 2) % 4)  # the learner is its own teammate
+            if mate is None:  # a chunk after its death
+                continue
+            heard = np.asarray([obs["message"] for obs in own.get_observations()])
+            sent = np.asarray(mate.get_actions())
+            steps = min(len(own), len(mate))
+            if steps == 0:
+                continue
+            np.testing.assert_array_equal(heard[1:steps + 1],
+                                          message_features(sent[:steps, 1:]))
+            checked += steps
+    assert checked > 50
+    words = np.concatenate([np.asarray(e.get_actions())[:, 1:]
+                            for episode in radio_smoke["episodes"]
+                            for e in episode.agent_episodes.values()
+                            if e.module_id == LEARNER and len(e)])
+    assert len(np.unique(words)) == 8  # sampled words, not silence
+
+
+def test_the_radio_checkpoint_restores_and_plays_in_the_arena(radio_smoke):
+    algo = radio_smoke["config"].build_algo()
+    try:
+        algo.restore(radio_smoke["checkpoint"])
+        assert algo.learner_group._learner.module[LEARNER].radio
+    finally:
+        algo.stop()
+    net = load_checkpoint_net(radio_smoke["checkpoint"])
+    assert isinstance(net, RadioNet)
+    for key, value in net.state_dict().items():
+        assert torch.equal(value, radio_smoke["trained"]["pi"][key])
+    assert isinstance(load_checkpoint_net(radio_smoke["checkpoint"], "vf"), RadioNet)
+    records = list(play_match(MatchSpec(team=radio_smoke["checkpoint"], vs="static", games=4,
+                                        variant="radio"), workers=1))
+    assert len(records) == 4 and {r.variant for r in records} == {"radio"}
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    ('game = "ffa"\n', r"game 'ffa' is not one of \['team', 'radio'\]"),
+    ('game = 3\n', "game must be a string, got 3"),
+    ('game = "radio"\n[league]\nslots = 2\n', r"a \[league\] .* plays the Team game only"),
+])
+def test_a_bad_game_is_refused_naming_the_file(tmp_path, text, message):
+    path = tmp_path / "bad.toml"
+    path.write_text(text + '[[stage]]\nname = "a"\nopponent = "static"\nepisodes = 5\n')
+    with pytest.raises(ValueError, match=f"curriculum file {path}.*{message}"):
+        load_curriculum(path)
+
+
+def test_team_curricula_stay_team():
+    assert load_curriculum("smoke").game == "team" and load_curriculum("radio_smoke").game == \
+        "radio"
+    team_env = build_config(load_curriculum("smoke")).env_config
+    assert "game" not in team_env  # a Team run under way resumes with its key set
+    assert build_config(load_curriculum("radio_smoke")).env_config["game"] == "radio"
