@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import torch
+from ray.rllib.core.columns import Columns
 from ray.tune.registry import register_env
 
 from rllib_pommer.arena.match import MatchSpec, play_match
@@ -19,6 +20,7 @@ from rllib_pommer.rl.checkpoint_policy import load_checkpoint_net
 from rllib_pommer.rl.config import build_config
 from rllib_pommer.rl.curriculum import load_curriculum
 from rllib_pommer.rl.env import PommeEnv
+from rllib_pommer.rl.fixed_modules import fixed_module_spec
 from rllib_pommer.rl.rl_module import LEARNER
 
 RADIO_ECHO_ENV = "pommerman_radio_echo"
@@ -186,3 +188,54 @@ def test_team_curricula_stay_team():
     team_env = build_config(load_curriculum("smoke")).env_config
     assert "game" not in team_env  # a Team run under way resumes with its key set
     assert build_config(load_curriculum("radio_smoke")).env_config["game"] == "radio"
+
+
+def _talker(tmp_path, greedy: bool) -> str:
+    """A policy file of a radio network whose hearing and speaking are not zero."""
+    torch.manual_seed(3)
+    net = RadioNet()
+    torch.nn.init.normal_(net.hear.weight)
+    torch.nn.init.normal_(net.speak.weight)
+    (tmp_path / "talker").mkdir(exist_ok=True)
+    torch.save(net.state_dict(), tmp_path / "talker" / "pi.pt")
+    policy = tmp_path / f"talker_{greedy}.toml"
+    policy.write_text(f'kind = "learned"\nweights = "talker/pi.pt"\n'
+                      f'greedy = {str(greedy).lower()}\n')
+    return str(policy)
+
+
+def _frozen(policy: str, env: PommeEnv):
+    spec = fixed_module_spec(policy)
+    spec.observation_space, spec.action_space = env.observation_spaces[0], env.action_spaces[0]
+    return spec.build()
+
+
+def _batch(env: PommeEnv) -> dict:
+    obs, _ = env.reset(seed=4)
+    obs, *_ = env.step({0: [0, 1, 2], 1: [0, 3, 4], 2: [0, 5, 6], 3: [0, 7, 0]})
+    return {Columns.OBS: {key: torch.as_tensor(np.stack([obs[a][key] for a in range(4)]))
+                          for key in ("planes", "message")}}
+
+
+def test_a_frozen_radio_net_speaks_and_a_team_net_plays_moves_in_teamradio(tmp_path):
+    radio_env = PommeEnv({"game": "radio"})
+    batch = _batch(radio_env)
+    greedy = _frozen(_talker(tmp_path, greedy=True), radio_env)
+    with torch.no_grad():
+        actions = greedy.forward_inference(batch)[Columns.ACTIONS]
+        logits = greedy.pi(batch[Columns.OBS]["planes"], batch[Columns.OBS]["message"])
+    assert actions.shape == (4, 3)
+    expected = [part.argmax(-1) for part in logits.split([6, 8, 8], dim=-1)]
+    assert torch.equal(actions, torch.stack(expected, -1))
+    sampling = _frozen(_talker(tmp_path, greedy=False), radio_env)
+    with torch.no_grad():
+        out = sampling.forward_exploration(batch)
+    assert out[Columns.ACTION_DIST_INPUTS].shape == (4, 22)
+    dist = sampling.get_exploration_action_dist_cls().from_logits(out[Columns.ACTION_DIST_INPUTS])
+    assert RADIO_ACTION_SPACE.contains(dist.sample()[0].numpy().astype(np.int64))
+    team = _frozen("imitation_sampling", radio_env)  # a Team net: moves alone, words (0, 0)
+    with torch.no_grad():
+        moves = team.forward_exploration(batch)[Columns.ACTIONS]
+    assert moves.shape == (4,) and ((moves >= 0) & (moves < 6)).all()
+    with pytest.raises(ValueError, match="is a TeamRadio network; it plays only in TeamRadio"):
+        _frozen(_talker(tmp_path, greedy=True), PommeEnv())
