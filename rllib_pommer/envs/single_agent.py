@@ -16,7 +16,8 @@ form, `team.OBSERVATIONS`).
 
 `game="radio"` plays TeamRadio (also registered as `rllib_pommer/PommeRadio-v0`): the trained
 agent's action is [move, word, word] (`MultiDiscrete([6, 8, 8])`) and it observes its teammate's
-words (`team.py`); the named policies on the other seats play moves, so they send (0, 0).
+words (`team.py`); the named policies on the other seats send (0, 0) unless their name asks them to
+speak (`_words`, `agents/speaker.py`).
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from copy import deepcopy
 import gymnasium as gym
 
 from ..agents.registry import make_agent
+from ..agents.speaker import words_of
 from ..game.constants import MAX_STEPS, NUM_AGENTS
 from .team import RENDER_MODES, MultiAgentTeam, check_action, check_render_mode
 
@@ -74,8 +76,10 @@ class PommeTeamEnv(gym.Env):
             raise ValueError("step: the trained agent's episode is over; call reset()")
         rows = self.team.last_observation
         actions = {self.seat: check_action(action, self.seat, self.team.radio)}  # before the others
-        actions |= {s: agent.act(rows.select(s)) for s, agent in self.others.items()
-                    if s in self.team.agents}
+        for s, agent in self.others.items():
+            if s in self.team.agents:
+                move = agent.act(rows.select(s))
+                actions[s] = [move, *words_of(agent)] if self.team.radio else move
         obs, rewards, terminateds, _, infos = self.team.step(actions)
         return obs[self.seat], rewards[self.seat], terminateds[self.seat], False, infos[self.seat]
 

@@ -44,7 +44,13 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
-from ..agents.registry import KINDS, policies_dir, policy_names, resolve_policy
+from ..agents.registry import (
+    KINDS,
+    WORDS_SUFFIX,
+    policies_dir,
+    policy_names,
+    resolve_policy,
+)
 from ..game.constants import PRESETS, TEAM_PRESET, has_teams
 from ..game.rewards import REWARD_MODES
 from ..util.shipped import data_dir
@@ -197,6 +203,10 @@ def _check_policy(where: str, name: Any) -> None:
         spec = resolve_policy(name)
     except ValueError:
         raise ValueError(f"{where}: unknown policy {name!r}; valid: {policy_names()}") from None
+    if spec.words:
+        raise ValueError(f"{where}: policy {name!r} speaks (its {WORDS_SUFFIX!r} suffix), which "
+                         f"the fixed RLlib modules do not: name it without {WORDS_SUFFIX!r} "
+                         f"(silent) or use the learner as teammate")
     if KINDS[spec.kind].fixed is None:
         fixed = [kind for kind, entry in KINDS.items() if entry.fixed]
         raise ValueError(f"{where}: policy {name!r} cannot be a fixed module (kind {spec.kind!r});"

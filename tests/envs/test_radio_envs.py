@@ -68,9 +68,15 @@ def test_the_gymnasium_seat_hears_its_teammate():
     env = PommeTeamEnv(game="radio", teammate="static", opponents="static", seat=1)
     obs, _ = env.reset(seed=2)
     assert set(obs) == {"planes", "message"} and _words(obs) == [0, 0]
-    obs, *_ = env.step(np.array([0, 4, 4]))  # scripted teammates play moves: silence
+    obs, *_ = env.step(np.array([0, 4, 4]))  # scripted teammates are silent
     assert _words(obs) == [0, 0]
     assert env.team.game.dump()["radio_from_agent"][1] == [4, 4]
+    talking = PommeTeamEnv(game="radio", teammate="static_words", opponents="static", seat=1)
+    talking.reset(seed=2)
+    heard = [_words(talking.step(0)[0]) for _ in range(6)]
+    assert len({tuple(w) for w in heard}) > 1  # the teammate's seeded words, step by step
+    talking.reset(seed=2)
+    assert [_words(talking.step(0)[0]) for _ in range(6)] == heard
 
 
 def test_team_env_is_unchanged_beside_radio():

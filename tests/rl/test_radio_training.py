@@ -23,6 +23,8 @@ from rllib_pommer.rl.env import PommeEnv
 from rllib_pommer.rl.fixed_modules import fixed_module_spec
 from rllib_pommer.rl.rl_module import LEARNER
 
+from .conftest import learner_episodes, log_softmax, snapshot, train_curriculum
+
 RADIO_ECHO_ENV = "pommerman_radio_echo"
 
 
@@ -39,35 +41,18 @@ class RadioEchoEnv(PommeEnv):
 register_env(RADIO_ECHO_ENV, RadioEchoEnv)
 
 
-def _snapshot(module):
-    return {k: v.detach().clone() for k, v in module.state_dict().items()}
-
-
-def _changed(before, after):
-    return any(not torch.equal(before[k], after[k]) for k in before)
-
-
 @pytest.fixture(scope="module")
 def radio_smoke(ray_session, pi_weights, tmp_path_factory):
     curriculum = load_curriculum("radio_smoke")
     config = build_config(curriculum, pi_weights=pi_weights, env=RADIO_ECHO_ENV)
     algo = config.build_algo()
     learner = algo.learner_group._learner.module[LEARNER]
-    start = {"pi": _snapshot(learner.pi), "radio": learner.radio,
+    start = {"pi": snapshot(learner.pi), "radio": learner.radio,
              "space": learner.action_space}
-    iterations = []
-    stage = 0
-    while True:
-        pi, vf = _snapshot(learner.pi), _snapshot(learner.vf)
-        result = algo.train()
-        iterations.append({"stage": stage, "pi_changed": _changed(pi, _snapshot(learner.pi)),
-                           "vf_changed": _changed(vf, _snapshot(learner.vf)), "result": result})
-        stage = result["curriculum"]["stage"]
-        if result["curriculum"]["episodes"] >= curriculum.total_episodes:
-            break
+    iterations = train_curriculum(algo, curriculum)
     episodes = algo.env_runner.sample(num_timesteps=300, explore=True)
     checkpoint = algo.save(str(tmp_path_factory.mktemp("radio_ckpt"))).checkpoint.path
-    trained = {"pi": _snapshot(learner.pi), "vf": _snapshot(learner.vf)}
+    trained = {"pi": snapshot(learner.pi), "vf": snapshot(learner.vf)}
     algo.stop()
     yield {"config": config, "start": start, "iterations": iterations, "episodes": episodes,
            "checkpoint": checkpoint, "trained": trained, "curriculum": curriculum}
@@ -103,29 +88,20 @@ def test_radio_stages_freeze_then_train_every_part(radio_smoke):
     assert max(shares) > 0, "the filters never overrode a move"
 
 
-def _log_softmax(x):
-    x = np.asarray(x, np.float64)
-    x = x - x.max(-1, keepdims=True)
-    return x - np.log(np.exp(x).sum(-1, keepdims=True))
-
-
 def test_the_stored_action_is_the_executed_one_with_its_logp(radio_smoke):
     checked = 0
-    for episode in radio_smoke["episodes"]:
-        for agent_episode in episode.agent_episodes.values():
-            if agent_episode.module_id != LEARNER or len(agent_episode) == 0:
-                continue
-            actions = np.asarray(agent_episode.get_actions())
-            assert actions.shape[1:] == (3,)
-            executed = [info["executed"] for info in agent_episode.get_infos()[1:]]
-            assert actions.tolist() == executed
-            logits = np.asarray(agent_episode.get_extra_model_outputs("action_dist_inputs"))
-            rows = np.arange(len(actions))
-            expected = sum(_log_softmax(part)[rows, actions[:, i]]
-                           for i, part in enumerate(np.split(logits, [6, 14], axis=-1)))
-            logp = np.asarray(agent_episode.get_extra_model_outputs("action_logp"))
-            np.testing.assert_allclose(logp, expected, atol=1e-4)
-            checked += len(actions)
+    for agent_episode in learner_episodes(radio_smoke["episodes"]):
+        actions = np.asarray(agent_episode.get_actions())
+        assert actions.shape[1:] == (3,)
+        executed = [info["executed"] for info in agent_episode.get_infos()[1:]]
+        assert actions.tolist() == executed
+        logits = np.asarray(agent_episode.get_extra_model_outputs("action_dist_inputs"))
+        rows = np.arange(len(actions))
+        expected = sum(log_softmax(part)[rows, actions[:, i]]
+                       for i, part in enumerate(np.split(logits, [6, 14], axis=-1)))
+        logp = np.asarray(agent_episode.get_extra_model_outputs("action_logp"))
+        np.testing.assert_allclose(logp, expected, atol=1e-4)
+        checked += len(actions)
     assert checked > 50
 
 
@@ -147,9 +123,7 @@ def test_the_learners_words_reach_its_teammate(radio_smoke):
             checked += steps
     assert checked > 50
     words = np.concatenate([np.asarray(e.get_actions())[:, 1:]
-                            for episode in radio_smoke["episodes"]
-                            for e in episode.agent_episodes.values()
-                            if e.module_id == LEARNER and len(e)])
+                            for e in learner_episodes(radio_smoke["episodes"])])
     assert len(np.unique(words)) == 8  # sampled words, not silence
 
 
@@ -174,6 +148,8 @@ def test_the_radio_checkpoint_restores_and_plays_in_the_arena(radio_smoke):
     ('game = "ffa"\n', r"game 'ffa' is not one of \['team', 'radio'\]"),
     ('game = 3\n', "game must be a string, got 3"),
     ('game = "radio"\n[league]\nslots = 2\n', r"a \[league\] .* plays the Team game only"),
+    ('game = "radio"\n[defaults]\nteammate = "simple_words"\n',
+     r"policy 'simple_words' speaks \(its '_words' suffix\), which the fixed RLlib modules"),
 ])
 def test_a_bad_game_is_refused_naming_the_file(tmp_path, text, message):
     path = tmp_path / "bad.toml"
