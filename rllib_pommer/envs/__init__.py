@@ -8,8 +8,10 @@
 
 Both play the compiled game with the paper's 19-plane observations and the training's rewards
 (`team.MultiAgentTeam`, which RLlib's env `rl/env.py` shares) and draw frames with the replay
-renderer. Importing this package imports neither Ray nor torch (tests/test_layering.py); a learned
-policy named as a teammate or opponent brings torch in when it is built.
+renderer; `game="radio"` (or `rllib_pommer/PommeRadio-v0`) plays TeamRadio, where agents also
+send their teammate two words a step. Importing this package imports neither Ray nor torch
+(tests/test_layering.py); a learned policy named as a teammate or opponent brings torch in when
+it is built.
 """
 
 from __future__ import annotations
@@ -17,9 +19,12 @@ from __future__ import annotations
 import gymnasium
 
 from .multi_agent import PommeParallelEnv, parallel_env
-from .single_agent import ENV_ID, PommeTeamEnv
+from .single_agent import ENV_ID, RADIO_ENV_ID, PommeTeamEnv
 from .team import MultiAgentTeam
 
-__all__ = ["ENV_ID", "MultiAgentTeam", "PommeParallelEnv", "PommeTeamEnv", "parallel_env"]
+__all__ = ["ENV_ID", "RADIO_ENV_ID", "MultiAgentTeam", "PommeParallelEnv", "PommeTeamEnv",
+           "parallel_env"]
 
 gymnasium.register(id=ENV_ID, entry_point="rllib_pommer.envs.single_agent:PommeTeamEnv")
+gymnasium.register(id=RADIO_ENV_ID, entry_point="rllib_pommer.envs.single_agent:PommeTeamEnv",
+                   kwargs={"game": "radio"})

@@ -6,7 +6,8 @@ agents are named "player_0".."player_3" (PettingZoo convention), and an agent th
 every live agent and no other: a missing, unknown or departed agent, a step before `reset`, an
 action outside the action space or an unknown config key is a ValueError naming it.
 Observations default to the 19 planes as a Box (config `observation` picks another form,
-`team.OBSERVATIONS`).
+`team.OBSERVATIONS`). Config `game = "radio"` plays TeamRadio: actions [move, word, word]
+(`MultiDiscrete([6, 8, 8])`) and the teammate's words in every observation (`team.py`).
 """
 
 from __future__ import annotations
@@ -17,7 +18,6 @@ import gymnasium as gym
 from pettingzoo import ParallelEnv
 
 from .team import (
-    ACTION_SPACE,
     CONFIG_KEYS,
     RENDER_MODES,
     MultiAgentTeam,
@@ -51,7 +51,8 @@ class PommeParallelEnv(ParallelEnv):
         # Own space objects per agent, so seeding one agent's space never moves another's.
         self._observation_spaces = {n: deepcopy(self.env.observation_spaces[self._ids[n]])
                                     for n in self.possible_agents}
-        self._action_spaces = {n: deepcopy(ACTION_SPACE) for n in self.possible_agents}
+        self._action_spaces = {n: deepcopy(self.env.agent_action_space)
+                               for n in self.possible_agents}
 
     def observation_space(self, agent):
         return self._observation_spaces[agent]
@@ -77,7 +78,8 @@ class PommeParallelEnv(ParallelEnv):
             raise ValueError(f"step: no action for {missing} (every live agent acts); "
                              f"live agents: {self.agents}")
         obs, rewards, terminateds, truncateds, infos = self.env.step(
-            {self._ids[name]: check_action(action, name) for name, action in actions.items()})
+            {self._ids[name]: check_action(action, name, self.env.radio)
+             for name, action in actions.items()})
         acted = [self._ids[name] for name in self.agents]
         self.agents = [_name(a) for a in self.env.agents]
         return (self._named(obs), self._named(rewards), self._named(terminateds),
@@ -99,5 +101,5 @@ class PommeParallelEnv(ParallelEnv):
 
 def parallel_env(render_mode: str | None = None, **config) -> PommeParallelEnv:
     """The PettingZoo env; keyword arguments are its config (seed, max_steps, reward,
-    observation)."""
+    observation, game)."""
     return PommeParallelEnv(config, render_mode)

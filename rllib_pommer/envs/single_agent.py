@@ -13,6 +13,11 @@ The episode ends when the trained agent leaves the game (it dies, or the game en
 zero until then and the `reward` mode's at that step (`game/rewards.py`: "shaped" as in the
 paper, or "raw"). Observations are the 19 planes as a Box by default (`observation` picks another
 form, `team.OBSERVATIONS`).
+
+`game="radio"` plays TeamRadio (also registered as `rllib_pommer/PommeRadio-v0`): the trained
+agent's action is [move, word, word] (`MultiDiscrete([6, 8, 8])`) and it observes its teammate's
+words (`team.py`); the named policies on the other seats send (0, 0) unless their name asks them to
+speak (`_words`, `agents/speaker.py`).
 """
 
 from __future__ import annotations
@@ -24,10 +29,12 @@ from copy import deepcopy
 import gymnasium as gym
 
 from ..agents.registry import make_agent
-from ..game.constants import MAX_STEPS, NUM_AGENTS, TEAM_PRESET
-from .team import ACTION_SPACE, RENDER_MODES, MultiAgentTeam, check_action, check_render_mode
+from ..agents.speaker import words_of
+from ..game.constants import MAX_STEPS, NUM_AGENTS
+from .team import RENDER_MODES, MultiAgentTeam, check_action, check_render_mode
 
 ENV_ID = "rllib_pommer/PommeTeam-v0"
+RADIO_ENV_ID = "rllib_pommer/PommeRadio-v0"  # the same env with game="radio"
 
 
 class PommeTeamEnv(gym.Env):
@@ -38,7 +45,8 @@ class PommeTeamEnv(gym.Env):
     def __init__(self, render_mode: str | None = None, *, seat: int = 0,
                  teammate: str | os.PathLike = "simple",
                  opponents: str | os.PathLike | Sequence[str | os.PathLike] = "simple",
-                 reward: str = "shaped", observation: str = "planes", max_steps: int = MAX_STEPS):
+                 reward: str = "shaped", observation: str = "planes", max_steps: int = MAX_STEPS,
+                 game: str = "team"):
         self.render_mode = check_render_mode(render_mode)
         if seat not in range(NUM_AGENTS):
             raise ValueError(f"seat {seat!r} is not one of 0..{NUM_AGENTS - 1}")
@@ -51,25 +59,27 @@ class PommeTeamEnv(gym.Env):
                     (seat + 3) % NUM_AGENTS: opponents[1]}
         self.others = {s: make_agent(policies[s]) for s in sorted(policies)}
         self.team = MultiAgentTeam({"reward": reward, "observation": observation,
-                                    "max_steps": max_steps})
+                                    "max_steps": max_steps, "game": game})
         self.observation_space = deepcopy(self.team.observation_spaces[seat])
-        self.action_space = deepcopy(ACTION_SPACE)
+        self.action_space = deepcopy(self.team.agent_action_space)
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
         obs, infos = self.team.reset(seed=int(self.np_random.integers(2**63)))
         for (s, agent), rng in zip(self.others.items(), self.np_random.spawn(len(self.others)),
                                    strict=True):
-            agent.reset(s, int(TEAM_PRESET.game_type), rng)
+            agent.reset(s, int(self.team.game.config.game_type), rng)
         return obs[self.seat], infos[self.seat]
 
     def step(self, action):
         if self.seat not in self.team.agents:
             raise ValueError("step: the trained agent's episode is over; call reset()")
         rows = self.team.last_observation
-        actions = {self.seat: check_action(action, self.seat)}  # before the others act
-        actions |= {s: agent.act(rows.select(s)) for s, agent in self.others.items()
-                    if s in self.team.agents}
+        actions = {self.seat: check_action(action, self.seat, self.team.radio)}  # before the others
+        for s, agent in self.others.items():
+            if s in self.team.agents:
+                move = agent.act(rows.select(s))
+                actions[s] = [move, *words_of(agent)] if self.team.radio else move
         obs, rewards, terminateds, _, infos = self.team.step(actions)
         return obs[self.seat], rewards[self.seat], terminateds[self.seat], False, infos[self.seat]
 

@@ -23,6 +23,13 @@ the training uses, holds "planes" (the paper's 19 float planes the networks read
 and the action filter rebuild the exact arrays the compiled agents take), so any policy can sit in
 any seat; "planes" is the 19 planes alone, as a Box; "planes_last" the same planes channels-last
 (11, 11, 19), the layout RLlib's default CNN encoder reads.
+
+`game` picks the variant (`GAMES`): "team", the default, or "radio", TeamRadio (docs/rules.md
+§10), the same game in which every agent also sends its teammate two words 0..7 each step. There
+an action is `MultiDiscrete([6, 8, 8])`, [move, word, word] (a plain move is accepted too and
+sends (0, 0), as in the reference), and every observation is a Dict holding also "message": the
+words the teammate sent in the step that produced it, one-hot (2, 8) (`features.
+message_features`); the "planes" and "planes_last" forms become {"planes", "message"}.
 """
 
 from __future__ import annotations
@@ -33,12 +40,21 @@ from dataclasses import replace
 import gymnasium as gym
 import numpy as np
 
-from ..game.constants import BOARD_SIZE, NUM_ACTIONS, NUM_AGENTS, TEAM_PRESET
-from ..game.engine import Game
+from ..game.constants import (
+    BOARD_SIZE,
+    NUM_ACTIONS,
+    NUM_AGENTS,
+    RADIO_NUM_WORDS,
+    RADIO_PRESET,
+    RADIO_VOCAB_SIZE,
+    TEAM_PRESET,
+    has_radio,
+)
+from ..game.engine import RADIO_ACTION_SIZE, Game
 from ..game.observation import Observation
 from ..game.raw_codec import RAW_SIZE, pack_raw
 from ..game.rewards import check_reward_mode, final_reward, kill_reward
-from ..imitation.features import NUM_PLANES, featurize
+from ..imitation.features import NUM_PLANES, featurize, message_features
 from ..viz.frames import state_frame
 from ..viz.render import draw_frame
 
@@ -50,6 +66,10 @@ OBSERVATION_SPACE = gym.spaces.Dict({
     "raw": gym.spaces.Box(0, np.iinfo(np.int16).max, (RAW_SIZE,), np.int16),
 })
 ACTION_SPACE = gym.spaces.Discrete(NUM_ACTIONS)
+# TeamRadio: [move, word, word], and the teammate's words heard, one-hot.
+RADIO_ACTION_SPACE = gym.spaces.MultiDiscrete([NUM_ACTIONS] + [RADIO_VOCAB_SIZE] * RADIO_NUM_WORDS)
+MESSAGE_SPACE = gym.spaces.Box(0.0, 1.0, (RADIO_NUM_WORDS, RADIO_VOCAB_SIZE), np.float32)
+GAMES = {"team": TEAM_PRESET, "radio": RADIO_PRESET}  # the env's variants, by config `game`
 
 
 def _dict_rows(obs: Observation) -> list[dict[str, np.ndarray]]:
@@ -67,17 +87,42 @@ OBSERVATIONS: dict[str, tuple[gym.Space, Callable[[Observation], list]]] = {
 
 
 # The config keys `MultiAgentTeam` reads: the PettingZoo env refuses others (a typo would pass).
-CONFIG_KEYS = ("seed", "max_steps", "reward", "observation", "action_filter", "jitter")
+CONFIG_KEYS = ("seed", "max_steps", "reward", "observation", "action_filter", "jitter", "game")
 
 
-def check_action(action, agent) -> int:
-    """`action` as an int if `ACTION_SPACE` contains it, else a ValueError naming `agent` and the
-    value: 2.7, "5", None or a one-element array are not actions (an int64 cast would play 2, 5
-    or raise a numpy error)."""
-    if not ACTION_SPACE.contains(action):
-        raise ValueError(f"action of agent {agent!r}: {action!r} is not in {ACTION_SPACE} "
-                         f"(an integer 0..{NUM_ACTIONS - 1})")
-    return int(action)
+def radio_space(space: gym.Space) -> gym.spaces.Dict:
+    """An observation form's space in TeamRadio: a Dict's with "message", a Box as "planes"."""
+    spaces = dict(space.spaces) if isinstance(space, gym.spaces.Dict) else {"planes": space}
+    return gym.spaces.Dict({**spaces, "message": MESSAGE_SPACE})
+
+
+def check_game(game) -> str:
+    """`game` if it names one of `GAMES`, else a ValueError naming it."""
+    if game not in GAMES:
+        raise ValueError(f"env config: game {game!r} is not one of {list(GAMES)}")
+    return game
+
+
+def _is_radio_action(action) -> bool:
+    if isinstance(action, (str, bytes)) or not isinstance(action, (list, tuple, np.ndarray)):
+        return False
+    arr = np.asarray(action)
+    return arr.dtype.kind in "iu" and RADIO_ACTION_SPACE.contains(arr.astype(np.int64))
+
+
+def check_action(action, agent, radio: bool = False) -> int | np.ndarray:
+    """`action` as an int if `ACTION_SPACE` contains it (with `radio`, a move alone), or with
+    `radio` as an int64 [move, word, word] if `RADIO_ACTION_SPACE` contains it, else a
+    ValueError naming `agent` and the value: 2.7, "5", None or a one-element array are not
+    actions (an int64 cast would play 2, 5 or raise a numpy error)."""
+    if ACTION_SPACE.contains(action):
+        return int(action)
+    if radio and _is_radio_action(action):
+        return np.asarray(action, np.int64)
+    space, what = ((RADIO_ACTION_SPACE, f"[move 0..{NUM_ACTIONS - 1}, word 0..7, word 0..7] or "
+                                        f"a move") if radio
+                   else (ACTION_SPACE, f"an integer 0..{NUM_ACTIONS - 1}"))
+    raise ValueError(f"action of agent {agent!r}: {action!r} is not in {space} ({what})")
 
 
 def check_max_steps(value) -> int:
@@ -94,9 +139,16 @@ def check_render_mode(render_mode: str | None) -> str | None:
     return render_mode
 
 
-def agent_observations(obs: Observation, form: str = "dict") -> dict[int, object]:
-    """The four agents' observations in `form` from the engine's (4,) observation rows."""
-    return dict(enumerate(OBSERVATIONS[form][1](obs)))
+def agent_observations(obs: Observation, form: str = "dict",
+                       message: np.ndarray | None = None) -> dict[int, object]:
+    """The four agents' observations in `form` from the engine's (4,) observation rows; with
+    the (4, 2) words each agent hears (`Game.message`), TeamRadio's (module docstring)."""
+    rows = OBSERVATIONS[form][1](obs)
+    if message is None:
+        return dict(enumerate(rows))
+    heard = message_features(message)
+    return {a: {**(row if isinstance(row, dict) else {"planes": row}), "message": heard[a]}
+            for a, row in enumerate(rows)}
 
 
 class MultiAgentTeam:
@@ -104,15 +156,17 @@ class MultiAgentTeam:
 
     config: seed, max_steps (default the preset's), reward ("shaped"|"raw"), observation
     ("dict"|"planes"|"planes_last"), action_filter and jitter (per-episode activation
-    probabilities of the learner's filters). Other keys are ignored: subclasses read their own
-    (the bench's zero-cost env reads episode_length).
+    probabilities of the learner's filters), game ("team"|"radio"). Other keys are ignored:
+    subclasses read their own (the bench's zero-cost env reads episode_length).
     """
 
     def __init__(self, config: dict | None = None):
         super().__init__()  # rl/env.PommeEnv puts RLlib's MultiAgentEnv next in line
         config = dict(config or {})
         max_steps = check_max_steps(config.get("max_steps", TEAM_PRESET.max_steps))
-        self.game = Game(replace(TEAM_PRESET, max_steps=max_steps))
+        self.game = Game(replace(GAMES[check_game(config.get("game", "team"))],
+                                 max_steps=max_steps))
+        self.radio = has_radio(self.game.config.game_type)
         self.observation_form = config.get("observation", "dict")
         if self.observation_form not in OBSERVATIONS:
             raise ValueError(f"env config: observation {self.observation_form!r} is not one of "
@@ -120,8 +174,10 @@ class MultiAgentTeam:
         space = OBSERVATIONS[self.observation_form][0]
         self.possible_agents = list(range(NUM_AGENTS))
         self.agents = []
-        self.observation_spaces = dict.fromkeys(self.possible_agents, space)
-        self.action_spaces = dict.fromkeys(self.possible_agents, ACTION_SPACE)
+        self.observation_spaces = dict.fromkeys(self.possible_agents,
+                                                radio_space(space) if self.radio else space)
+        self.agent_action_space = RADIO_ACTION_SPACE if self.radio else ACTION_SPACE
+        self.action_spaces = dict.fromkeys(self.possible_agents, self.agent_action_space)
         self._rng = np.random.default_rng(config.get("seed"))
         self.set_stage(config.get("reward", "shaped"), config.get("action_filter", 0.0),
                        config.get("jitter", 0.0))
@@ -140,23 +196,31 @@ class MultiAgentTeam:
         self._filters = {name: bool(self._rng.random() < p)
                          for name, p in self.filter_probabilities.items()}
         self.agents = list(self.possible_agents)
-        observations = agent_observations(self.last_observation, self.observation_form)
+        observations = self._observations(self.last_observation)
         return observations, {a: {"filters": self._filters} for a in self.agents}
+
+    def _observations(self, obs: Observation) -> dict[int, object]:
+        return agent_observations(obs, self.observation_form,
+                                  self.game.message if self.radio else None)
 
     def step(self, action_dict):
         """One step of every agent: `action_dict` maps seats to actions; a seat left out (a
-        dead agent) plays Stop, as in the engine. An action the space refuses is a ValueError
-        before anything moves."""
-        actions = np.zeros(NUM_AGENTS, np.int64)
+        dead agent) plays Stop (and in TeamRadio sends (0, 0)), as in the engine. An action the
+        space refuses is a ValueError before anything moves."""
+        actions = np.zeros((NUM_AGENTS, RADIO_ACTION_SIZE) if self.radio else NUM_AGENTS,
+                           np.int64)
         for agent, action in action_dict.items():
             if agent not in self.possible_agents:
                 raise ValueError(f"unknown agent {agent!r}; agents: {self.possible_agents}")
-            actions[agent] = check_action(action, agent)
+            if self.radio:  # a move alone sends (0, 0)
+                actions[agent, :np.size(action)] = check_action(action, agent, radio=True)
+            else:
+                actions[agent] = check_action(action, agent)
         obs, engine_rewards, done, info = self.game.step(actions)
         self.last_observation = obs
         alive = self.game.batch.alive[0]
         killers = self.game.batch.killers[0].tolist()
-        all_obs = agent_observations(obs, self.observation_form)
+        all_obs = self._observations(obs)
         acting, self.agents = self.agents, []
         newly_dead = [agent for agent in acting if not alive[agent]]
         observations, rewards, terminateds, infos = {}, {}, {}, {}

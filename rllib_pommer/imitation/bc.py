@@ -259,7 +259,7 @@ def train(cfg: BCConfig) -> dict:
     checkpoint = _Checkpoint(cfg)
     start_epoch, start_batch, seconds = checkpoint.load(net, optimizer)
     if cfg.init is not None and (start_epoch, start_batch) == (0, 0):
-        net.load_state_dict(load_policy_net(cfg.init).state_dict())
+        net.load_state_dict(load_policy_net(cfg.init, radio=False).state_dict())
     writer = SummaryWriter(str(cfg.training_dir / "tensorboard"))
     batches_per_epoch = train_data.num_samples // cfg.batch_size + 1
     if cfg.max_batches_per_epoch is not None:

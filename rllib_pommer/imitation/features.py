@@ -21,14 +21,24 @@ teammate 6, bomb 7, flames 8; the agent's own cell counts as passage.
 
 Agents are drawn over bombs on the board, so a bomb under an agent shows only in planes 16-17.
 Ammo and blast strength are scaled by 10, their largest possible value (the ammo cap, and the FFA
-range cap).
+range cap). TeamRadio observations give the same planes as Team ones (its teams are Team's).
+
+In TeamRadio an agent also hears its teammate's two words (`message`, docs/rules.md §10);
+`message_features` gives them as a one-hot (2, 8) block, the radio network's second input
+(`network.RadioNet`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..game.constants import GameType, Item, enemies_of, teammate_of
+from ..game.constants import (
+    RADIO_VOCAB_SIZE,
+    GameType,
+    Item,
+    enemies_of,
+    teammate_of,
+)
 from ..game.observation import Observation
 
 NUM_PLANES = 19
@@ -57,6 +67,7 @@ def _identity_table() -> np.ndarray:
 
 
 IDENTITY_CODES = _identity_table()
+WORD_ONE_HOT = np.eye(RADIO_VOCAB_SIZE, dtype=np.float32)
 
 
 def featurize(obs: Observation) -> np.ndarray:
@@ -84,3 +95,9 @@ def featurize(obs: Observation) -> np.ndarray:
     desirability[own] = OWN_DESIRABILITY
     out[..., 18, :, :] = desirability / 8.0
     return out
+
+
+def message_features(message) -> np.ndarray:
+    """float32 one-hot words (..., 2, 8) of messages (..., 2) of words 0..7 (TeamRadio's
+    `message`: the teammate's two words)."""
+    return WORD_ONE_HOT[np.asarray(message, np.int64)]

@@ -35,15 +35,18 @@ from ..agents.registry import (
     registered,
     resolve_policy,
 )
-from ..game.constants import NUM_ACTIONS
+from ..game.constants import NUM_ACTIONS, RADIO_NUM_WORDS
 from ..game.observation import Observation
-from .features import featurize
-from .network import PommerNet
+from .features import featurize, message_features
+from .network import PommerNet, RadioNet, build_net, is_radio_state, load_weights
 
 
-def load_policy_net(path: str | Path, num_outputs: int = NUM_ACTIONS) -> PommerNet:
+def load_policy_net(path: str | Path, num_outputs: int = NUM_ACTIONS,
+                    radio: bool | None = None) -> PommerNet:
     """A policy network (dropout off, eval mode) from a state_dict file, with a clear error;
-    `num_outputs=1` reads a PPO value network."""
+    `num_outputs=1` reads a PPO value network. It is a `RadioNet` for a TeamRadio state_dict,
+    a `PommerNet` for a Team one; `radio=True` asks for a `RadioNet` from either (a Team net's
+    move logits exactly: `network.load_weights`), `radio=False` for a `PommerNet`."""
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"{path}: weights file not found")
@@ -51,11 +54,11 @@ def load_policy_net(path: str | Path, num_outputs: int = NUM_ACTIONS) -> PommerN
         state = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as exc:  # torch raises several types for corrupt or foreign files
         raise ValueError(f"{path}: not a readable weights file ({exc})") from None
-    net = PommerNet(num_outputs)
+    net = build_net(num_outputs, is_radio_state(state) if radio is None else radio)
     try:
-        net.load_state_dict(state)
+        load_weights(net, state)
     except (RuntimeError, TypeError, AttributeError) as exc:
-        raise ValueError(f"{path}: weights do not fit PommerNet ({exc})") from None
+        raise ValueError(f"{path}: weights do not fit {type(net).__name__} ({exc})") from None
     return net.eval()
 
 
@@ -70,8 +73,15 @@ class LearnedPolicy:
 
     @torch.no_grad()
     def probabilities(self, obs: Observation) -> np.ndarray:
-        """Action probabilities (B, 6) for observations with leading shape (B,)."""
-        logits = self.net(torch.from_numpy(featurize(obs)))
+        """Action probabilities (B, 6) for observations with leading shape (B,). A TeamRadio
+        network (`RadioNet`) plays its moves alone here, hearing silence: the Agent protocol
+        hands agents no message and takes no words from them."""
+        planes = torch.from_numpy(featurize(obs))
+        if isinstance(self.net, RadioNet):
+            silence = message_features(np.zeros((len(planes), RADIO_NUM_WORDS), np.int64))
+            logits = self.net(planes, torch.from_numpy(silence))[:, :NUM_ACTIONS]
+        else:
+            logits = self.net(planes)
         return torch.softmax(logits, dim=-1).numpy().astype(np.float64)
 
     def choose(self, probs: np.ndarray, rngs: Sequence[np.random.Generator]) -> np.ndarray:

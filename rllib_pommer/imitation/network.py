@@ -9,6 +9,18 @@
 About 94k parameters (0.4 MB as float32). Dropout is used in behaviour cloning only; with
 `dropout=0` its layers are identities, and since dropout has no parameters the same state_dict
 loads into either build (the PPO module's pi and its separate vf replica).
+
+`RadioNet` is the same network for TeamRadio (docs/rules.md §10): it hears the teammate's two
+words (one-hot 2 x 8, `features.message_features`), added through a linear map into the FC 128
+layer before its ReLU (a concatenation of the words after the conv trunk, written as a sum), and
+with `words` it speaks too: two 8-way word heads on the same 128 features beside the move logits.
+
+    out = [moves (num_outputs) | word 1 (8) | word 2 (8)]
+
+Both new maps start at zero, so a `RadioNet` holding a Team net's weights (`load_team_state`)
+gives that net's move logits exactly, whatever it hears, and uniform words; training moves them
+from there. `PommerNet` itself is unchanged (its state_dict keys and shapes), so every shipped
+Team policy keeps loading, into either class.
 """
 
 from __future__ import annotations
@@ -16,11 +28,12 @@ from __future__ import annotations
 import torch
 from torch import nn
 
-from ..game.constants import NUM_ACTIONS
+from ..game.constants import NUM_ACTIONS, RADIO_NUM_WORDS, RADIO_VOCAB_SIZE
 from .features import NUM_PLANES
 
 CHANNELS = (32, 64, 64)
 HIDDEN = 128
+WORD_LOGITS = RADIO_NUM_WORDS * RADIO_VOCAB_SIZE  # the two word heads, and the one-hot message
 
 
 class PommerNet(nn.Module):
@@ -48,3 +61,56 @@ class PommerNet(nn.Module):
     def forward(self, planes: torch.Tensor) -> torch.Tensor:
         """(B, 19, 11, 11) float planes -> (B, num_outputs)."""
         return self.head(self.convs(planes))
+
+
+class RadioNet(PommerNet):
+    """PommerNet that hears its teammate's words and, with `words`, speaks two (module
+    docstring): (planes, message) in, [num_outputs | 8 | 8] logits out (num_outputs alone
+    without `words`: the value net)."""
+    RADIO_KEYS = ("hear.weight", "speak.weight", "speak.bias")
+
+    def __init__(self, num_outputs: int = NUM_ACTIONS, words: bool = True, dropout: float = 0.0):
+        super().__init__(num_outputs, dropout)
+        self.hear = nn.Linear(WORD_LOGITS, HIDDEN, bias=False)
+        nn.init.zeros_(self.hear.weight)
+        self.speak = nn.Linear(HIDDEN, WORD_LOGITS) if words else None
+        if self.speak is not None:
+            nn.init.zeros_(self.speak.weight)
+            nn.init.zeros_(self.speak.bias)
+
+    def forward(self, planes: torch.Tensor, message: torch.Tensor) -> torch.Tensor:
+        """(B, 19, 11, 11) float planes and (B, 2, 8) one-hot words -> (B, num_outputs [+ 16])."""
+        flatten, hidden, relu, out = self.head
+        features = relu(hidden(flatten(self.convs(planes))) + self.hear(message.flatten(1)))
+        if self.speak is None:
+            return out(features)
+        return torch.cat([out(features), self.speak(features)], dim=-1)
+
+    def load_team_state(self, state: dict) -> None:
+        """Load a Team `PommerNet`'s state_dict (its keys and shapes exactly, else torch's
+        error); hearing and speaking keep their weights (zero when new, module docstring)."""
+        own = self.state_dict()
+        self.load_state_dict({**state, **{key: own[key] for key in self.RADIO_KEYS
+                                          if key in own}})
+
+
+def is_radio_state(state: dict) -> bool:
+    """Whether a state_dict is a `RadioNet`'s (it hears), not a Team `PommerNet`'s."""
+    return "hear.weight" in state
+
+
+def build_net(num_outputs: int = NUM_ACTIONS, radio: bool = False) -> PommerNet:
+    """A policy (`num_outputs` 6) or value (1) network of the Team game, or with `radio` of
+    TeamRadio, whose policy speaks (`RadioNet`); dropout off."""
+    return RadioNet(num_outputs, words=num_outputs == NUM_ACTIONS) if radio \
+        else PommerNet(num_outputs)
+
+
+def load_weights(net: PommerNet, state: dict) -> None:
+    """`state` into `net`: a `RadioNet` takes a radio state_dict as is and a Team one through
+    `load_team_state`, a `PommerNet` a Team one; anything else is torch's error naming the
+    keys or shapes that do not fit."""
+    if isinstance(net, RadioNet) and not is_radio_state(state):
+        net.load_team_state(state)
+    else:
+        net.load_state_dict(state)

@@ -44,7 +44,7 @@ from ray.tune.result import SHOULD_CHECKPOINT
 
 from ..game.constants import Action
 from ..game.kills import deaths_by_cause, kills_of_team
-from .connectors import FILTERS_KEY
+from .connectors import FILTERS_KEY, move_of
 from .curriculum import Curriculum
 from .league import gate_step, members, next_slot, read_book
 from .mapping import SeatMapping
@@ -101,7 +101,7 @@ def _learner_outcome(chunks) -> dict | None:
             if agent.module_id == LEARNER:
                 returns[agent.agent_id] = returns.get(agent.agent_id, 0.0) + agent.get_return()
                 bombs[agent.agent_id] = bombs.get(agent.agent_id, 0) + sum(
-                    int(a) == Action.BOMB for a in agent.get_actions())
+                    move_of(a) == Action.BOMB for a in agent.get_actions())
     finals = [e.get_infos(-1) for e in chunks[-1].agent_episodes.values()]
     final = next((info for info in finals if "winners" in info), None)
     if not returns or final is None:

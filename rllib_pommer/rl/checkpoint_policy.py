@@ -35,7 +35,7 @@ import torch
 from ..agents.registry import policy_names, resolve_policy
 from ..game.constants import NUM_ACTIONS
 from ..imitation.learned import load_policy_net, register_learned_kind
-from ..imitation.network import PommerNet
+from ..imitation.network import PommerNet, build_net, is_radio_state
 from .curriculum import Curriculum, run_curriculum
 from .history import (
     HISTORY_FILE,
@@ -127,7 +127,8 @@ def _load_state(stream: typing.BinaryIO, name: object) -> dict:
 
 def load_checkpoint_net(path: str | Path, part: str = "pi", module: str = "learner") -> PommerNet:
     """The learner's policy network (`part="pi"`) or value network (`"vf"`), eval mode, from a
-    checkpoint, trial or run folder; `module` names another module's (a self-play snapshot)."""
+    checkpoint, trial or run folder; `module` names another module's (a self-play snapshot).
+    A TeamRadio run's networks are `RadioNet`s (they hear), a Team run's `PommerNet`s."""
     if part not in NET_OUTPUTS:
         raise ValueError(f"part must be one of {list(NET_OUTPUTS)}, got {part!r}")
     checkpoint = latest_checkpoint(path)
@@ -138,12 +139,12 @@ def load_checkpoint_net(path: str | Path, part: str = "pi", module: str = "learn
     state = read_module_state(state_file)
     weights = {str(key).removeprefix(f"{part}."): torch.as_tensor(value)
                for key, value in state.items() if str(key).startswith(f"{part}.")}
-    net = PommerNet(NET_OUTPUTS[part])
+    net = build_net(NET_OUTPUTS[part], is_radio_state(weights))
     try:
         net.load_state_dict(weights)
     except (RuntimeError, TypeError) as exc:
-        raise ValueError(f"{state_file}: learner {part} weights do not fit PommerNet "
-                         f"({exc})") from None
+        raise ValueError(f"{state_file}: learner {part} weights do not fit "
+                         f"{type(net).__name__} ({exc})") from None
     return net.eval()
 
 
@@ -279,8 +280,9 @@ def starting_policy(run: Path, curriculum: Curriculum, exclude: str = "") -> str
         spec = resolve_policy(name)
         if name == exclude or spec.kind != "learned":
             continue
-        weights = load_policy_net(spec.file("weights")).state_dict()  # both PommerNets: same keys
-        if all(torch.equal(weights[key], value) for key, value in start.items()):
+        weights = load_policy_net(spec.file("weights")).state_dict()
+        # a Team net's keys: all of a PommerNet's, and a RadioNet's but hearing and speaking
+        if all(key in start and torch.equal(start[key], value) for key, value in weights.items()):
             return name
     return None
 
@@ -311,6 +313,7 @@ def _source(policy: str, checkpoint: Path, trial: Trial, iteration: int,
         "policy": policy, "run": run.name, "trial": trial.path.name,
         "checkpoint": f"{checkpoint.parent.name}/{checkpoint.name}", "iteration": iteration,
         "curriculum": {"name": curriculum.name, "description": curriculum.description,
+                       "game": curriculum.game,
                        "stages": [dataclasses.asdict(stage) for stage in curriculum.stages]},
         "exported_at_commit": _git(run, "rev-parse", "--short", "HEAD") or "unknown",
         "run_commits": packed_commits(run, trial),

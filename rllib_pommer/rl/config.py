@@ -80,14 +80,15 @@ WEIGHTS_HINTS = {
 }
 
 
-def check_weights(path: Path, part: str = "pi") -> Path:
+def check_weights(path: Path, part: str = "pi", radio: bool = False) -> Path:
     """The weights file of the learner's `part` ("pi" or "vf", checkpoint_policy.NET_OUTPUTS),
-    resolved, once it has loaded into a PommerNet: a missing, cut short or foreign file is named
-    here, before Ray starts, not deep inside a Ray actor."""
+    resolved, once it has loaded into the network the learner builds (a PommerNet, with `radio`
+    a RadioNet): a missing, cut short or foreign file is named here, before Ray starts, not deep
+    inside a Ray actor."""
     if not Path(path).is_file():
         what, source = WEIGHTS_HINTS[part]
         raise ValueError(f"{what} not found: {path} ({source})")
-    load_policy_net(path, NET_OUTPUTS[part])
+    load_policy_net(path, NET_OUTPUTS[part], radio=radio)
     return Path(path).resolve()
 
 
@@ -101,24 +102,27 @@ def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None
     `num_env_runners` remote runners of `cpus_per_env_runner` Ray CPUs each sample while the
     learner waits (its torch threads: names.LEARNER_THREADS_ENV). Tune resumes a run only with
     the key set it started with, so no key may be added here for a run already under way."""
+    radio = curriculum.game == "radio"  # a property that parses the file: read it once
     weights = Path(pi_weights) if pi_weights else curriculum.pi_weights
-    weights = weights.resolve() if restoring else check_weights(weights)
+    weights = weights.resolve() if restoring else check_weights(weights, radio=radio)
     first = curriculum.stages[0]
     ppo = curriculum.ppo
     model_config = {"pi_weights": str(weights)}
     vf_weights = curriculum.vf_weights  # a property that parses the file: read it once
     if vf_weights:  # only then: a run under way resumes with the keys it started with
         model_config["vf_weights"] = str(vf_weights if restoring else check_weights(
-            vf_weights, part="vf"))
+            vf_weights, part="vf", radio=radio))
+    env_config = {"max_steps": curriculum.max_steps, "reward": first.reward,
+                  "action_filter": first.action_filter, "jitter": first.jitter}
+    if radio:  # only then, as vf_weights (the learner module reads it from the spaces)
+        env_config["game"] = "radio"
     modules = {LEARNER: RLModuleSpec(module_class=PommerPPOModule, model_config=model_config)}
     modules |= {name: fixed_module_spec(name) for name in curriculum.policies()}
     if curriculum.league:  # built empty; the callback's gate fills them (league.py)
         modules |= snapshot_specs(curriculum.league)
     return (
         PPOConfig()
-        .environment(env, env_config={
-            "max_steps": curriculum.max_steps, "reward": first.reward,
-            "action_filter": first.action_filter, "jitter": first.jitter})
+        .environment(env, env_config=env_config)
         .env_runners(
             num_env_runners=num_env_runners,
             num_cpus_per_env_runner=cpus_per_env_runner,

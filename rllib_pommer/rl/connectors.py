@@ -19,6 +19,10 @@ the episode-end metrics.
 A fixed module named with the registry's filter suffixes (`_jitter`, `_action`, `_jitter_action`)
 has its filters on in every episode; they are kept apart (FIXED_FILTERS_KEY), so the learner's
 counts stay the learner's.
+
+In TeamRadio an action is [move, word, word]: the filters see and replace the move alone, the
+words pass through, and the log-probability is the whole action's under the module's
+multi-categorical distribution.
 """
 
 from __future__ import annotations
@@ -90,6 +94,20 @@ class EpisodeFilters:
         return executed
 
 
+def move_of(action) -> int:
+    """The move of an action: itself, or a TeamRadio [move, word, word]'s first part."""
+    return int(action[0]) if np.ndim(action) else int(action)
+
+
+def with_move(action, move: int):
+    """`action` with its move replaced: an int, or a TeamRadio [move, word, word] (a copy)."""
+    if not np.ndim(action):
+        return move
+    replaced = np.array(action)
+    replaced[0] = move
+    return replaced
+
+
 class LearnerFilters(ConnectorV2):
     """Module-to-env piece: the learner's action through its episode's jitter correction and
     action filter (when on), with ACTION_LOGP recomputed for the executed action; a fixed
@@ -118,16 +136,17 @@ class LearnerFilters(ConnectorV2):
                 flags = (agent_episode.get_infos(-1).get("filters", {}) if module_id == LEARNER
                          else self._fixed_flags[module_id])
                 filters = by_agent[agent_id] = EpisodeFilters(flags, agent_id, raw)
-            chosen = int(actions[0])
+            action = actions[0]
+            chosen = move_of(action)
             executed = filters.act(chosen, raw)
-            if executed == chosen or module_id != LEARNER:
-                actions[0] = executed
+            if executed == chosen:
                 continue
-            actions[0] = executed
-            if Columns.ACTION_LOGP in batch:  # by the module's own distribution, as PPO's
-                # learner recomputes it: the ratio of an overridden row starts at exactly 1
+            actions[0] = with_move(action, executed)
+            if module_id == LEARNER and Columns.ACTION_LOGP in batch:  # by the module's own
+                # distribution, as PPO's learner recomputes it: the ratio of an overridden row
+                # starts at exactly 1
                 logits = torch.as_tensor(batch[Columns.ACTION_DIST_INPUTS][key][0])
                 dist = rl_module[LEARNER].get_exploration_action_dist_cls().from_logits(logits)
-                logp = dist.logp(torch.tensor(executed)).item()  # a float32's value
+                logp = dist.logp(torch.as_tensor(actions[0])).item()  # a float32's value
                 batch[Columns.ACTION_LOGP][key][0] = np.float32(logp)
         return batch

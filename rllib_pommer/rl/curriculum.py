@@ -5,6 +5,7 @@ A file names the run, optionally the imitation weights pi starts from (default: 
 the stages in order::
 
     name = "paper"
+    game = "team"                                # optional; "radio": TeamRadio
     pi_weights = "../policies/imitation/pi.pt"   # optional; relative to this file
     [ppo]
     train_batch_size = 4000
@@ -24,9 +25,12 @@ beside a lone learner), and an opponent a list of policies, a league that takes 
 episodes (`opponent = ["simple", "static", "ppo_cautious"]`; rl/mapping.py says how), and
 names may carry the registry's filter suffixes (`simple_action`: SimpleAgent behind the action
 filter). A `[league]` table (`slots`, `gate_games`, `gate_win`) adds frozen self-play snapshots of
-the learner, which join the league of every stage marked `self_play = true` (rl/league.py). Every
-error
-names the file, the key and the valid choices, so a typo fails before Ray starts: this module
+the learner, which join the league of every stage marked `self_play = true` (rl/league.py).
+`game = "radio"` trains in TeamRadio: the learner's action is [move, word, word] and it hears its
+teammate's words (rl/rl_module.py); scripted and Team policies in the other seats play moves,
+which send no words, so `teammate = "learner"` is how the words reach a listener that learns;
+self-play snapshots are Team nets, so a radio curriculum has no [league]. Every error names the
+file, the key and the valid choices, so a typo fails before Ray starts: this module
 imports neither Ray nor torch (tests/test_layering.py checks a whole load in a fresh interpreter).
 """
 
@@ -40,8 +44,14 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
-from ..agents.registry import KINDS, policies_dir, policy_names, resolve_policy
-from ..game.constants import TEAM_PRESET
+from ..agents.registry import (
+    KINDS,
+    WORDS_SUFFIX,
+    policies_dir,
+    policy_names,
+    resolve_policy,
+)
+from ..game.constants import PRESETS, TEAM_PRESET, has_teams
 from ..game.rewards import REWARD_MODES
 from ..util.shipped import data_dir
 from .names import LEARNER
@@ -52,8 +62,10 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-TOP_KEYS = ("name", "description", "pi_weights", "vf_weights", "max_steps", "ppo", "league",
-            "defaults", "stage")
+TOP_KEYS = ("name", "description", "game", "pi_weights", "vf_weights", "max_steps", "ppo",
+            "league", "defaults", "stage")
+# `game`: the presets played in two teams, the env's variants (envs/team.GAMES).
+GAMES = tuple(name for name, game in PRESETS.items() if has_teams(game.game_type))
 
 
 @dataclass(frozen=True)
@@ -104,6 +116,13 @@ class Curriculum:
         with self.path.open("rb") as f:
             name = tomllib.load(f).get("vf_weights")
         return (self.path.parent / name).resolve() if name else None
+
+    @property
+    def game(self) -> str:
+        """The file's `game` (`GAMES`: "team", the default, or "radio", TeamRadio, where the
+        learner also speaks), read again from it as `description` is."""
+        with self.path.open("rb") as f:
+            return tomllib.load(f).get("game", "team")
 
     @property
     def total_episodes(self) -> int:
@@ -184,6 +203,10 @@ def _check_policy(where: str, name: Any) -> None:
         spec = resolve_policy(name)
     except ValueError:
         raise ValueError(f"{where}: unknown policy {name!r}; valid: {policy_names()}") from None
+    if spec.words:
+        raise ValueError(f"{where}: policy {name!r} speaks (its {WORDS_SUFFIX!r} suffix), which "
+                         f"the fixed RLlib modules do not: name it without {WORDS_SUFFIX!r} "
+                         f"(silent) or use the learner as teammate")
     if KINDS[spec.kind].fixed is None:
         fixed = [kind for kind, entry in KINDS.items() if entry.fixed]
         raise ValueError(f"{where}: policy {name!r} cannot be a fixed module (kind {spec.kind!r});"
@@ -234,10 +257,12 @@ def load_curriculum(name_or_path: str | Path) -> Curriculum:
         raise ValueError(f"curriculum file {path}: invalid TOML ({exc})") from None
     where = f"curriculum file {path}"
     _check_keys(where, data, TOP_KEYS)
-    for key, kind in (("name", str), ("description", str), ("pi_weights", str),
+    for key, kind in (("name", str), ("description", str), ("game", str), ("pi_weights", str),
                       ("vf_weights", str)):
         if key in data:
             _check_type(where, key, data[key], kind)
+    if data.get("game", "team") not in GAMES:
+        raise ValueError(f"{where}: game {data['game']!r} is not one of {list(GAMES)}")
     if "max_steps" in data:
         _check_type(where, "max_steps", data["max_steps"], int, positive=True)
     ppo = data.get("ppo", {})
@@ -245,6 +270,9 @@ def load_curriculum(name_or_path: str | Path) -> Curriculum:
     league = data.get("league")
     if league is not None:
         _check_options(f"{where} [league]", league, LeagueSettings.options())
+        if data.get("game", "team") != "team":
+            raise ValueError(f"{where}: a [league] (self-play snapshots) plays the Team game "
+                             f"only, not game {data['game']!r}")
     defaults = data.get("defaults", {})
     _check_keys(f"{where} [defaults]", defaults, set(STAGE_KEYS) - {"name", "episodes"})
     tables = data.get("stage", [])

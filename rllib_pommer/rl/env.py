@@ -6,8 +6,10 @@ PettingZoo and Gymnasium envs; its docstring says what agents observe, `game/rew
 they earn); this module adds RLlib's base class and the registration. The training uses the
 default "dict" observation, so any policy can sit in any seat;
 `env_config={"observation": "planes_last"}` gives the planes alone as a Box, for RLlib's default
-model. The raw codec (`game/raw_codec.py`) and the run's names (`names.py`) stay importable from
-here, where older code and notebooks import them.
+model; `env_config={"game": "radio"}` plays TeamRadio ([move, word, word] actions, the teammate's
+words in every observation; a curriculum's `game = "radio"` sets it). The raw codec
+(`game/raw_codec.py`) and the run's names (`names.py`) stay importable from here, where older
+code and notebooks import them.
 """
 
 from __future__ import annotations

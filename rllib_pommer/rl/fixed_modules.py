@@ -14,15 +14,21 @@ already marked seeded keeps its stream (the arena cross-test seeds it as the are
 that remember nothing (Static, Suicide) make stateless modules.
 
 Learned and RLlib-checkpoint policies are frozen `PommerNet`s that act by sampling (or greedily,
-per their policy file) on the "planes".
+per their policy file) on the "planes". In TeamRadio (a `MultiDiscrete([6, 8, 8])` action
+space) a radio network (`RadioNet`) also hears the "message" and speaks by the same rule; a
+Team network plays its moves alone there, which send the words (0, 0), and so do scripted
+policies.
 """
 
 from __future__ import annotations
 
 import hashlib
 
+import gymnasium as gym
 import numpy as np
+import torch
 from ray.rllib.core.columns import Columns
+from ray.rllib.core.distribution.torch.torch_distribution import TorchMultiCategorical
 from ray.rllib.core.rl_module import RLModule
 from ray.rllib.core.rl_module.rl_module import RLModuleSpec
 from ray.rllib.core.rl_module.torch import TorchRLModule
@@ -32,6 +38,7 @@ from ..agents.scripted import RULES
 from ..agents.simple import RECENT_LENGTH, SimpleMemory
 from ..game.raw_codec import unpack_raw
 from ..imitation.learned import load_learned
+from ..imitation.network import RadioNet
 
 # Packed memory: recent cells (6 x 2), recent_len, prev_dir, rng state (uint64 bits), seeded flag.
 _RECENT = 2 * RECENT_LENGTH
@@ -121,11 +128,30 @@ class FrozenNetModule(TorchRLModule):
         net, _ = load_learned(spec)
         self.pi = net.requires_grad_(False)
         self.greedy = bool(spec.params.get("greedy", False))
+        self.speaks = isinstance(net, RadioNet)
+        self.lens = ([int(n) for n in self.action_space.nvec]
+                     if isinstance(self.action_space, gym.spaces.MultiDiscrete) else None)
+        if self.speaks and self.lens is None:
+            raise ValueError(f"policy {spec.name!r} is a TeamRadio network; it plays only in "
+                             f"TeamRadio (env config game = \"radio\")")
+        if self.lens is not None:
+            self.action_dist_cls = TorchMultiCategorical.get_partial_dist_cls(
+                input_lens=self.lens)
 
     def _forward(self, batch, **kwargs):
-        logits = self.pi(batch[Columns.OBS]["planes"])
+        obs = batch[Columns.OBS]
+        if not self.speaks:
+            logits = self.pi(obs["planes"])
+            if self.greedy:
+                return {Columns.ACTIONS: logits.argmax(-1)}
+            if self.lens is None:
+                return {Columns.ACTION_DIST_INPUTS: logits}
+            # a Team network in TeamRadio: its moves alone
+            return {Columns.ACTIONS: torch.distributions.Categorical(logits=logits).sample()}
+        logits = self.pi(obs["planes"], obs["message"])
         if self.greedy:
-            return {Columns.ACTIONS: logits.argmax(-1)}
+            parts = logits.split(self.lens, dim=-1)
+            return {Columns.ACTIONS: torch.stack([part.argmax(-1) for part in parts], -1)}
         return {Columns.ACTION_DIST_INPUTS: logits}
 
 

@@ -46,6 +46,7 @@ from ray.rllib.algorithms.ppo.torch.ppo_torch_learner import PPOTorchLearner
 from ray.rllib.core.columns import Columns
 from ray.rllib.evaluation.postprocessing import Postprocessing
 
+from ..game.constants import NUM_ACTIONS
 from .names import LEARNER_THREADS_ENV
 from .rl_module import LEARNER
 from .trained_agents import TrainedAgentsOnly
@@ -85,7 +86,8 @@ class PommerPPOLearner(PPOTorchLearner):
             log_ratio = dist.logp(batch[Columns.ACTIONS]) - batch[Columns.ACTION_LOGP]  # PPO's
             valid = (batch[Columns.LOSS_MASK].bool() if Columns.LOSS_MASK in batch
                      else torch.ones_like(log_ratio, dtype=torch.bool))
-            self._log_pi_health(logits, log_ratio[valid], batch[Columns.ACTION_LOGP][valid])
+            self._log_pi_health(logits[..., :NUM_ACTIONS],  # the moves' (TeamRadio: not words')
+                                log_ratio[valid], batch[Columns.ACTION_LOGP][valid])
             bound = config.learner_config_dict.get(DUAL_CLIP_KEY, math.inf)
             if bound < math.inf:
                 advantages = batch[Postprocessing.ADVANTAGES]

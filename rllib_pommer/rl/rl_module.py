@@ -28,6 +28,12 @@ A curriculum may also name `vf_weights`, a value network's state_dict, for a run
 another's (its pi and vf exported from a checkpoint) without a value warm-up; like pi's file it
 is read only where the module is trained, and a restore overwrites it.
 
+In TeamRadio (the env's `game = "radio"`, seen here as its `MultiDiscrete([6, 8, 8])` action
+space) pi is a `RadioNet` that hears the teammate's words and speaks two, and vf a `RadioNet`
+that hears them: the action distribution is RLlib's multi-categorical over [move, word, word]
+(one 6-way and two 8-way categoricals on the 22 logits), and Team weights files start both nets
+with the Team net's outputs exactly (`imitation/network.py`), a radio run's files as they are.
+
 `set_pi_frozen` serves the value warm-up (paper: 10,000 games with pi fixed while vf learns). It
 sets `requires_grad`, which checkpoints do not keep, so the curriculum callback re-applies it after
 every restore and every iteration.
@@ -37,13 +43,15 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import gymnasium as gym
 import torch
 from ray.rllib.core.columns import Columns
+from ray.rllib.core.distribution.torch.torch_distribution import TorchMultiCategorical
 from ray.rllib.core.rl_module.apis import ValueFunctionAPI
 from ray.rllib.core.rl_module.torch import TorchRLModule
 
 from ..imitation.learned import load_policy_net
-from ..imitation.network import PommerNet
+from ..imitation.network import build_net
 from .names import LEARNER  # noqa: F401  (its module id, long imported from here)
 
 
@@ -51,16 +59,21 @@ class PommerPPOModule(TorchRLModule, ValueFunctionAPI):
     """The PPO learner module: pi (the paper's CNN, from the imitation weights) in float32 and a
     separate value CNN under bfloat16 autocast, both channels-last (module docstring)."""
     def setup(self):
-        self.pi = PommerNet(6, dropout=0.0).to(memory_format=torch.channels_last)
-        self.vf = PommerNet(1).to(memory_format=torch.channels_last)
+        self.radio = isinstance(self.action_space, gym.spaces.MultiDiscrete)
+        self.pi = build_net(6, self.radio).to(memory_format=torch.channels_last)
+        self.vf = build_net(1, self.radio).to(memory_format=torch.channels_last)
+        if self.radio:  # [move, word, word]: a categorical each (module docstring)
+            self.action_dist_cls = TorchMultiCategorical.get_partial_dist_cls(
+                input_lens=[int(n) for n in self.action_space.nvec])
         self.pi_source: str | None = None  # where pi's weights came from (module docstring)
         weights = self.model_config.get("pi_weights")
         if weights and not self.inference_only and Path(weights).is_file():
-            self.pi.load_state_dict(load_policy_net(weights).state_dict())
+            self.pi.load_state_dict(load_policy_net(weights, radio=self.radio).state_dict())
             self.pi_source = f"imitation weights {weights}"
         vf_weights = self.model_config.get("vf_weights")  # a run that continues another's
         if vf_weights and not self.inference_only and Path(vf_weights).is_file():
-            self.vf.load_state_dict(load_policy_net(vf_weights, num_outputs=1).state_dict())
+            self.vf.load_state_dict(load_policy_net(vf_weights, num_outputs=1,
+                                                    radio=self.radio).state_dict())
 
     def set_state(self, state) -> None:
         super().set_state(state)
@@ -75,16 +88,18 @@ class PommerPPOModule(TorchRLModule, ValueFunctionAPI):
                 f"and no checkpoint was restored into it (start a new run where that file exists, "
                 f"or pass --pi-weights)")
 
-    @staticmethod
-    def _planes(batch) -> torch.Tensor:
-        return batch[Columns.OBS]["planes"].contiguous(memory_format=torch.channels_last)
+    def _inputs(self, batch) -> tuple[torch.Tensor, ...]:
+        """The networks' inputs: the planes channels-last, and in TeamRadio the words heard."""
+        obs = batch[Columns.OBS]
+        planes = obs["planes"].contiguous(memory_format=torch.channels_last)
+        return (planes, obs["message"]) if self.radio else (planes,)
 
     def _forward(self, batch, **kwargs):
-        return {Columns.ACTION_DIST_INPUTS: self.pi(self._planes(batch))}
+        return {Columns.ACTION_DIST_INPUTS: self.pi(*self._inputs(batch))}
 
     def compute_values(self, batch, embeddings=None) -> torch.Tensor:
         with torch.autocast("cpu", dtype=torch.bfloat16):
-            return self.vf(self._planes(batch)).squeeze(-1).float()
+            return self.vf(*self._inputs(batch)).squeeze(-1).float()
 
     def set_pi_frozen(self, frozen: bool) -> None:
         for parameter in self.pi.parameters():

@@ -28,6 +28,12 @@ CARD_FILE = "MODEL_CARD.md"
 NOTES_FILE = "NOTES.md"
 
 
+# What the exported pi is, by the curriculum's game (an older source.json names none: Team).
+NETS = {"team": "The paper's CNN",
+        "radio": "TeamRadio: the paper's CNN hearing its teammate's two words and speaking two "
+                 "(`RadioNet`)"}
+
+
 def _schedule(curriculum: dict) -> str:
     lines = ["| stage | games | opponents | teammate | reward | action filter | jitter "
              "correction | pi |", "|---" * 8 + "|"]
@@ -78,7 +84,8 @@ def _preface(source: dict, training: Training) -> list[str]:
         f"# Model card: `{source['policy']}` ({title})",
         f"The learner of the PPO run `{source['run']}` (curriculum `{curriculum['name']}`), "
         f"exported from `{source['checkpoint']}` at training iteration {source['iteration']:,}: "
-        f"{games:,} of {total:,} games, {status}. The paper's CNN (`pi.pt`, a plain state_dict "
+        f"{games:,} of {total:,} games, {status}. {NETS[curriculum.get('game', 'team')]} "
+        f"(`pi.pt`, a plain state_dict "
         f"for `torch.load(weights_only=True)`), 19 feature planes, sampling its actions as it "
         f"did in training; the variants `{source['policy']}_jitter`, `_action` and "
         f"`_jitter_action` add the paper's filters.",

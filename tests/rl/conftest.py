@@ -8,6 +8,7 @@ import subprocess
 import tarfile
 from pathlib import Path
 
+import numpy as np
 import pytest
 import torch
 
@@ -32,6 +33,48 @@ def pi_weights(tmp_path_factory):
     path = tmp_path_factory.mktemp("weights") / "pi.pt"
     torch.save(PommerNet().state_dict(), path)
     return path
+
+
+def snapshot(module) -> dict:
+    """A copy of a module's weights."""
+    return {k: v.detach().clone() for k, v in module.state_dict().items()}
+
+
+def train_curriculum(algo, curriculum) -> list[dict]:
+    """Train `algo` (built from `curriculum`) until the curriculum's episodes are played; per
+    iteration: the stage in force when it began, whether the learner's pi and vf moved, and
+    RLlib's result."""
+    from rllib_pommer.rl.rl_module import LEARNER
+
+    learner = algo.learner_group._learner.module[LEARNER]
+    iterations, stage = [], 0
+    while True:
+        pi, vf = snapshot(learner.pi), snapshot(learner.vf)
+        result = algo.train()
+        iterations.append({"stage": stage, "pi_changed": _changed(pi, snapshot(learner.pi)),
+                           "vf_changed": _changed(vf, snapshot(learner.vf)), "result": result})
+        stage = result["curriculum"]["stage"]
+        if result["curriculum"]["episodes"] >= curriculum.total_episodes:
+            return iterations
+
+
+def learner_episodes(episodes) -> list:
+    """The learner's non-empty single-agent episodes in sampled multi-agent episodes."""
+    from rllib_pommer.rl.rl_module import LEARNER
+
+    return [single for episode in episodes for single in episode.agent_episodes.values()
+            if single.module_id == LEARNER and len(single)]
+
+
+def log_softmax(x) -> np.ndarray:
+    """log-probabilities of logits (float64), as a categorical distribution's."""
+    x = np.asarray(x, np.float64)
+    x = x - x.max(-1, keepdims=True)
+    return x - np.log(np.exp(x).sum(-1, keepdims=True))
+
+
+def _changed(before: dict, after: dict) -> bool:
+    return any(not torch.equal(before[k], after[k]) for k in before)
 
 
 REPO = Path(__file__).resolve().parents[2]

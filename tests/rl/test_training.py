@@ -15,6 +15,8 @@ from rllib_pommer.rl.curriculum import load_curriculum
 from rllib_pommer.rl.env import PommeEnv
 from rllib_pommer.rl.rl_module import LEARNER
 
+from .conftest import learner_episodes, log_softmax, snapshot, train_curriculum
+
 ECHO_ENV = "pommerman_team_echo"
 
 
@@ -31,33 +33,16 @@ class EchoEnv(PommeEnv):
 register_env(ECHO_ENV, EchoEnv)
 
 
-def _snapshot(module):
-    return {k: v.detach().clone() for k, v in module.state_dict().items()}
-
-
-def _changed(before, after):
-    return any(not torch.equal(before[k], after[k]) for k in before)
-
-
 @pytest.fixture(scope="module")
 def smoke(ray_session, pi_weights, tmp_path_factory):
     curriculum = load_curriculum("smoke")
     config = build_config(curriculum, pi_weights=pi_weights, env=ECHO_ENV)
     algo = config.build_algo()
     learner = algo.learner_group._learner.module[LEARNER]
-    iterations = []
-    stage = 0
-    while True:
-        pi, vf = _snapshot(learner.pi), _snapshot(learner.vf)
-        result = algo.train()
-        iterations.append({"stage": stage, "pi_changed": _changed(pi, _snapshot(learner.pi)),
-                           "vf_changed": _changed(vf, _snapshot(learner.vf)), "result": result})
-        stage = result["curriculum"]["stage"]
-        if result["curriculum"]["episodes"] >= curriculum.total_episodes:
-            break
+    iterations = train_curriculum(algo, curriculum)
     episodes = algo.env_runner.sample(num_timesteps=300, explore=True)
     checkpoint = algo.save(str(tmp_path_factory.mktemp("ckpt"))).checkpoint.path
-    learner_pi = _snapshot(learner.pi)
+    learner_pi = snapshot(learner.pi)
     mappings = (algo.config.policy_mapping_fn.stage, algo.env_runner.config.policy_mapping_fn.stage)
     algo.stop()
     yield {"config": config, "iterations": iterations, "episodes": episodes,
@@ -93,27 +78,18 @@ def test_stage_boundary_and_warmup_freeze(smoke):
     assert max(shares) > 0, "the filters never overrode an action"
 
 
-def _log_softmax(x):
-    x = np.asarray(x, np.float64)
-    x = x - x.max(-1, keepdims=True)
-    return x - np.log(np.exp(x).sum(-1, keepdims=True))
-
-
 def test_connector_stores_the_executed_action_with_its_logp(smoke):
     checked = 0
-    for episode in smoke["episodes"]:
-        for agent_episode in episode.agent_episodes.values():
-            if agent_episode.module_id != LEARNER or len(agent_episode) == 0:
-                continue
-            actions = np.asarray(agent_episode.get_actions())
-            infos = agent_episode.get_infos()
-            executed = [info["executed"] for info in infos[1:]]
-            assert actions.tolist() == executed
-            logp = np.asarray(agent_episode.get_extra_model_outputs("action_logp"))
-            logits = np.asarray(agent_episode.get_extra_model_outputs("action_dist_inputs"))
-            expected = _log_softmax(logits)[np.arange(len(actions)), actions]
-            np.testing.assert_allclose(logp, expected, atol=1e-4)
-            checked += len(actions)
+    for agent_episode in learner_episodes(smoke["episodes"]):
+        actions = np.asarray(agent_episode.get_actions())
+        infos = agent_episode.get_infos()
+        executed = [info["executed"] for info in infos[1:]]
+        assert actions.tolist() == executed
+        logp = np.asarray(agent_episode.get_extra_model_outputs("action_logp"))
+        logits = np.asarray(agent_episode.get_extra_model_outputs("action_dist_inputs"))
+        expected = log_softmax(logits)[np.arange(len(actions)), actions]
+        np.testing.assert_allclose(logp, expected, atol=1e-4)
+        checked += len(actions)
     assert checked > 50
 
 
