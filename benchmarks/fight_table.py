@@ -34,7 +34,7 @@ def _label(team: str) -> str:
     return team
 
 
-def _cell(team: str, vs: str, games: int, seed: int, out: Path) -> dict:
+def _cell(team: str, vs: str, games: int, seed: int, out: Path, workers: int | None) -> dict:
     path = out / f"{_label(team).replace('/', '_').replace(':', '_')}__vs__{vs}.jsonl"
     if path.is_file():
         records = [game_record(row) for row in read_rows(path)]
@@ -44,7 +44,7 @@ def _cell(team: str, vs: str, games: int, seed: int, out: Path) -> dict:
                              f"remove it or pick another --out")
         return summarise(records)
     start = time.monotonic()
-    records = play_match(MatchSpec(team, vs, games, seed=seed))
+    records = play_match(MatchSpec(team, vs, games, seed=seed), workers)
     write_records(path, records)
     print(f"{_label(team)} vs {vs}: {games} games in {time.monotonic() - start:.0f} s",
           file=sys.stderr)
@@ -65,9 +65,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--games", type=int, default=400)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", type=Path, required=True)
+    parser.add_argument("--workers", type=int, default=None,
+                        help="processes playing games (default: all cores)")
     args = parser.parse_args(argv)
     if args.games <= 0:
         parser.error(f"--games must be positive, got {args.games}")
+    if args.workers is not None and args.workers <= 0:
+        parser.error(f"--workers must be positive, got {args.workers}")
     if args.out.exists() and not args.out.is_dir():
         parser.error(f"--out {args.out} is a file, not a folder")
     args.out.mkdir(parents=True, exist_ok=True)
@@ -78,7 +82,8 @@ def main(argv: list[str] | None = None) -> int:
              "|---|---|---|---|---|---|---|"]
     for team in args.teams:
         for vs in args.vs:
-            lines.append(_row(team, vs, _cell(team, vs, args.games, args.seed, args.out)))
+            cell = _cell(team, vs, args.games, args.seed, args.out, args.workers)
+            lines.append(_row(team, vs, cell))
     table = "\n".join(lines) + "\n"
     (args.out / "fight.md").write_text(table)
     print(table)

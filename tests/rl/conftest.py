@@ -1,5 +1,6 @@
-"""One Ray instance for the RL tests (2 CPUs, no dashboard), throwaway pi weights, and the
-project's campaign run as committed."""
+"""One Ray instance for the RL tests (2 CPUs, no dashboard), throwaway pi weights, an env that
+reports what it executed, a smoke run of a curriculum, and the project's campaign run as
+committed."""
 
 from __future__ import annotations
 
@@ -11,8 +12,26 @@ from pathlib import Path
 import numpy as np
 import pytest
 import torch
+from ray.tune.registry import register_env
 
 from rllib_pommer.imitation.network import PommerNet
+from rllib_pommer.rl.env import PommeEnv
+
+ECHO_ENV = "pommerman_echo"
+
+
+class EchoEnv(PommeEnv):
+    """Reports in each info the action the env executed for that agent on the step (an int in
+    Team, [move, word, word] in TeamRadio), to compare with what the connector stored."""
+
+    def step(self, action_dict):
+        out = super().step(action_dict)
+        for agent, info in out[4].items():
+            info["executed"] = np.asarray(action_dict[agent]).tolist()
+        return out
+
+
+register_env(ECHO_ENV, EchoEnv)
 
 
 @pytest.fixture(scope="session")
@@ -56,6 +75,30 @@ def train_curriculum(algo, curriculum) -> list[dict]:
         stage = result["curriculum"]["stage"]
         if result["curriculum"]["episodes"] >= curriculum.total_episodes:
             return iterations
+
+
+def smoke_run(name: str, pi_weights, folder: Path) -> dict:
+    """The curriculum `name` trained in-process on the echo env to its end: the learner's
+    start (pi weights, radio or not, action space), per-iteration results, 300 sampled steps,
+    a checkpoint in `folder`, the trained pi and vf, and the stage each mapping ended at."""
+    from rllib_pommer.rl.config import build_config
+    from rllib_pommer.rl.curriculum import load_curriculum
+    from rllib_pommer.rl.rl_module import LEARNER
+
+    curriculum = load_curriculum(name)
+    config = build_config(curriculum, pi_weights=pi_weights, env=ECHO_ENV)
+    algo = config.build_algo()
+    learner = algo.learner_group._learner.module[LEARNER]
+    start = {"pi": snapshot(learner.pi), "radio": learner.radio, "space": learner.action_space}
+    iterations = train_curriculum(algo, curriculum)
+    episodes = algo.env_runner.sample(num_timesteps=300, explore=True)
+    checkpoint = algo.save(str(folder)).checkpoint.path
+    trained = {"pi": snapshot(learner.pi), "vf": snapshot(learner.vf)}
+    mappings = (algo.config.policy_mapping_fn.stage, algo.env_runner.config.policy_mapping_fn.stage)
+    algo.stop()
+    return {"config": config, "curriculum": curriculum, "start": start, "iterations": iterations,
+            "episodes": episodes, "checkpoint": checkpoint, "trained": trained,
+            "mappings": mappings}
 
 
 def learner_episodes(episodes) -> list:

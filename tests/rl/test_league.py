@@ -14,7 +14,7 @@ from rllib_pommer.rl.curriculum import load_curriculum
 from rllib_pommer.rl.mapping import SeatMapping
 from rllib_pommer.rl.names import LEARNER
 
-from .test_training import ECHO_ENV
+from .conftest import ECHO_ENV
 
 LEAGUE_SMOKE = """
 name = "league_smoke"

@@ -11,7 +11,7 @@ from rllib_pommer.rl.connectors import FILTERS_KEY
 from rllib_pommer.rl.curriculum import load_curriculum
 from rllib_pommer.rl.rl_module import LEARNER
 
-from .test_training import ECHO_ENV
+from .conftest import ECHO_ENV
 
 TEAM_SMOKE = """
 name = "team_smoke"

@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 import torch
 from ray.rllib.core.columns import Columns
-from ray.tune.registry import register_env
 
 from rllib_pommer.arena.match import MatchSpec, play_match
 from rllib_pommer.envs.team import RADIO_ACTION_SPACE
@@ -23,39 +22,12 @@ from rllib_pommer.rl.env import PommeEnv
 from rllib_pommer.rl.fixed_modules import fixed_module_spec
 from rllib_pommer.rl.rl_module import LEARNER
 
-from .conftest import learner_episodes, log_softmax, snapshot, train_curriculum
-
-RADIO_ECHO_ENV = "pommerman_radio_echo"
-
-
-class RadioEchoEnv(PommeEnv):
-    """Reports in each info the action the env executed for that agent on the step."""
-
-    def step(self, action_dict):
-        out = super().step(action_dict)
-        for agent, info in out[4].items():
-            info["executed"] = np.atleast_1d(action_dict[agent]).tolist()
-        return out
-
-
-register_env(RADIO_ECHO_ENV, RadioEchoEnv)
+from .conftest import learner_episodes, log_softmax, smoke_run
 
 
 @pytest.fixture(scope="module")
 def radio_smoke(ray_session, pi_weights, tmp_path_factory):
-    curriculum = load_curriculum("radio_smoke")
-    config = build_config(curriculum, pi_weights=pi_weights, env=RADIO_ECHO_ENV)
-    algo = config.build_algo()
-    learner = algo.learner_group._learner.module[LEARNER]
-    start = {"pi": snapshot(learner.pi), "radio": learner.radio,
-             "space": learner.action_space}
-    iterations = train_curriculum(algo, curriculum)
-    episodes = algo.env_runner.sample(num_timesteps=300, explore=True)
-    checkpoint = algo.save(str(tmp_path_factory.mktemp("radio_ckpt"))).checkpoint.path
-    trained = {"pi": snapshot(learner.pi), "vf": snapshot(learner.vf)}
-    algo.stop()
-    yield {"config": config, "start": start, "iterations": iterations, "episodes": episodes,
-           "checkpoint": checkpoint, "trained": trained, "curriculum": curriculum}
+    yield smoke_run("radio_smoke", pi_weights, tmp_path_factory.mktemp("radio_ckpt"))
 
 
 def test_the_learner_starts_as_the_team_net_and_speaks_uniformly(radio_smoke, pi_weights):

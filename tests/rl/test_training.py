@@ -6,48 +6,17 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import torch
-from ray.tune.registry import register_env
 
 from rllib_pommer.arena.match import MatchSpec, play_match
 from rllib_pommer.rl.checkpoint_policy import load_checkpoint_net
-from rllib_pommer.rl.config import build_config
-from rllib_pommer.rl.curriculum import load_curriculum
-from rllib_pommer.rl.env import PommeEnv
 from rllib_pommer.rl.rl_module import LEARNER
 
-from .conftest import learner_episodes, log_softmax, snapshot, train_curriculum
-
-ECHO_ENV = "pommerman_team_echo"
-
-
-class EchoEnv(PommeEnv):
-    """Reports in each info the action the env executed for that agent on the step."""
-
-    def step(self, action_dict):
-        out = super().step(action_dict)
-        for agent, info in out[4].items():
-            info["executed"] = int(action_dict[agent])
-        return out
-
-
-register_env(ECHO_ENV, EchoEnv)
+from .conftest import learner_episodes, log_softmax, smoke_run
 
 
 @pytest.fixture(scope="module")
 def smoke(ray_session, pi_weights, tmp_path_factory):
-    curriculum = load_curriculum("smoke")
-    config = build_config(curriculum, pi_weights=pi_weights, env=ECHO_ENV)
-    algo = config.build_algo()
-    learner = algo.learner_group._learner.module[LEARNER]
-    iterations = train_curriculum(algo, curriculum)
-    episodes = algo.env_runner.sample(num_timesteps=300, explore=True)
-    checkpoint = algo.save(str(tmp_path_factory.mktemp("ckpt"))).checkpoint.path
-    learner_pi = snapshot(learner.pi)
-    mappings = (algo.config.policy_mapping_fn.stage, algo.env_runner.config.policy_mapping_fn.stage)
-    algo.stop()
-    yield {"config": config, "iterations": iterations, "episodes": episodes,
-           "checkpoint": checkpoint, "learner_pi": learner_pi, "curriculum": curriculum,
-           "mappings": mappings}
+    yield smoke_run("smoke", pi_weights, tmp_path_factory.mktemp("ckpt"))
 
 
 def test_stage_boundary_and_warmup_freeze(smoke):
@@ -103,7 +72,7 @@ def test_checkpoint_restores_stage_and_plays_in_the_arena(smoke):
         algo.stop()
     net = load_checkpoint_net(smoke["checkpoint"])
     for key, value in net.state_dict().items():
-        assert torch.equal(value, smoke["learner_pi"][key])
+        assert torch.equal(value, smoke["trained"]["pi"][key])
     records = list(play_match(MatchSpec(team=smoke["checkpoint"], vs="static", games=4),
                               workers=1))
     assert len(records) == 4
