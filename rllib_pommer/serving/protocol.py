@@ -1,9 +1,10 @@
 """Decoding the request bodies of the 2018 competition's agent protocol.
 
-Every body is a JSON object whose values are themselves JSON-encoded strings (`{"id": "0"}`), as
-the competition's runner sent them. Each decoder raises `BadRequest` naming the field and what is
-wrong with it, so a caller sees its own mistake instead of a server error, and the server keeps
-running.
+Every body is a JSON object whose values are themselves JSON-encoded strings (`{"id": "0"}`), as the
+competition's runner sent them. A TeamRadio game (game type 3, the 2019 competition's) adds the
+observation's `message`, the teammate's last two words. Each decoder raises `BadRequest` naming the
+field and what is wrong with it, so a caller sees its own mistake instead of a server error, and the
+server keeps running.
 """
 
 from __future__ import annotations
@@ -14,9 +15,9 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ..game.constants import NUM_AGENTS, GameType, teammate_of
+from ..game.constants import NUM_AGENTS, GameType, has_radio, has_teams, teammate_of
 from ..game.observation import Observation
-from ..game.serialize import load_observation
+from ..game.serialize import load_observation, load_words
 
 # Bit generators whose `state` is plain JSON (ints only), so a caller's stream can be sent exactly.
 JSON_STATE_BIT_GENERATORS = {cls.__name__: cls for cls in (np.random.PCG64, np.random.PCG64DXSM)}
@@ -24,6 +25,9 @@ JSON_STATE_BIT_GENERATORS = {cls.__name__: cls for cls in (np.random.PCG64, np.r
 
 class BadRequest(ValueError):
     """A malformed request: answered with HTTP 400 and this message."""
+
+
+GAME_TYPES = range(min(GameType), max(GameType) + 1)
 
 
 class InitAgent(NamedTuple):
@@ -98,27 +102,39 @@ def rng_from_seed(seed: Any) -> np.random.Generator:
 
 def parse_init_agent(body: Mapping[str, Any]) -> InitAgent:
     agent_id = _integer(_decoded(body, "id"), "id", range(NUM_AGENTS))
-    game_type = _integer(_decoded(body, "game_type"), "game_type", range(1, 3))
+    game_type = _integer(_decoded(body, "game_type"), "game_type", GAME_TYPES)
     seed = _decoded(body, "seed", required=False)
     return InitAgent(agent_id, game_type, None if seed is None else rng_from_seed(seed))
 
 
-def parse_action(body: Mapping[str, Any], agent_id: int) -> Observation:
-    """The observation of `/action`, for the agent seated by `/init_agent`. `action_space` is
-    ignored: the Pommerman action space is always Discrete(6)."""
+class ActionRequest(NamedTuple):
+    """A decoded `/action` body."""
+    obs: Observation
+    message: tuple[int, ...] | None  # TeamRadio: the words the agent hears; None in other games
+
+
+def parse_action(body: Mapping[str, Any], agent_id: int, game_type: int) -> ActionRequest:
+    """The observation of `/action` (with its `message` in TeamRadio), for the seat of
+    `/init_agent`. `action_space` is ignored: an agent's move is always one of six."""
     obs = _decoded(body, "obs")
     try:
         observation = load_observation(obs, agent_id)
+        message = load_words(obs.get("message"), f"observation of agent {agent_id}.message") \
+            if has_radio(game_type) else None
     except (ValueError, OverflowError) as exc:
         raise BadRequest(str(exc)) from None
-    # The only trace of the seat in an observation: catches two seats sharing one server.
+    _check_teammate(obs, observation, agent_id)
+    return ActionRequest(observation, message)
+
+
+def _check_teammate(obs: Mapping[str, Any], observation: Observation, agent_id: int) -> None:
+    """The only trace of the seat in an observation: catches two seats sharing one server."""
     teammate, expected = obs.get("teammate"), teammate_of(agent_id, GameType.TEAM)
-    if observation.game_type == GameType.TEAM and teammate is not None and teammate != expected:
+    if has_teams(observation.game_type) and teammate is not None and teammate != expected:
         raise BadRequest(
             f"observation has teammate {teammate!r}, but agent {agent_id}'s teammate is "
             f"{expected}: one server plays one seat, so two seats need two servers"
         )
-    return observation
 
 
 def parse_episode_end(body: Mapping[str, Any]) -> float:
