@@ -9,6 +9,7 @@ server keeps running.
 
 from __future__ import annotations
 
+import hashlib
 import json
 from collections.abc import Mapping
 from typing import Any, NamedTuple
@@ -80,7 +81,10 @@ def _integer(value: Any, key: str, allowed: range | None = None) -> int:
 
 def rng_from_seed(seed: Any) -> np.random.Generator:
     """Our extension's `seed`: a non-negative integer (fed to `default_rng`) or a numpy
-    bit-generator state object, which continues the caller's own stream exactly."""
+    bit-generator state object, which continues the caller's own stream exactly. A state does not
+    carry the caller's seed sequence, which child streams (`spawn`: the filters', a `_words`
+    agent's words) come from; the served generator's is derived from the state, so the same state
+    gives the same children on every server start (not the caller's own children)."""
     if isinstance(seed, dict):
         name = seed.get("bit_generator")
         cls = JSON_STATE_BIT_GENERATORS.get(name) if isinstance(name, str) else None
@@ -89,7 +93,8 @@ def rng_from_seed(seed: Any) -> np.random.Generator:
                 f"field 'seed': bit generator {seed.get('bit_generator')!r} is not one of "
                 f"{sorted(JSON_STATE_BIT_GENERATORS)}"
             )
-        bit_generator = cls()
+        digest = hashlib.sha256(json.dumps(seed, sort_keys=True).encode()).digest()
+        bit_generator = cls(np.random.SeedSequence(int.from_bytes(digest, "little")))
         try:
             bit_generator.state = seed
         except (TypeError, ValueError, KeyError, OverflowError) as exc:

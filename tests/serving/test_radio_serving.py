@@ -51,6 +51,20 @@ def test_a_served_radio_net_hears_the_message_and_answers_move_and_words(serve, 
     assert len({tuple(turn[1:]) for turn in served}) > 3  # it speaks, and not one pair only
 
 
+def test_a_served_speakers_words_are_reproducible_from_a_generator_state(serve):
+    """A `_words` agent draws its words from a child stream; from a sent generator state the
+    child is the same on every start, so the same seed gives the same words."""
+    seen, state = radio_observations(12), np.random.default_rng([3, 1]).bit_generator.state
+    games = []
+    for port in (serve("simple_words"), serve("simple_words")):
+        for _ in range(2):
+            post(port, "init_agent", {"id": str(SEAT), "game_type": str(RADIO),
+                                      "seed": json.dumps(state)})
+            games.append([post(port, "action", action_body(o, m)).json()["action"]
+                          for o, m in seen])
+    assert games[1:] == games[:1] * 3 and len({tuple(t[1:]) for t in games[0]}) > 3
+
+
 def test_a_silent_agent_answers_silence_and_team_games_stay_plain(serve):
     port, (obs, message) = serve("simple"), radio_observations(1)[0]
     post(port, "init_agent", {"id": str(SEAT), "game_type": str(RADIO)})
