@@ -230,7 +230,7 @@ class Table:
         try:
             self.game.say(words)
         except ValueError as exc:
-            raise BadRequest(f"words: {exc}") from None
+            raise BadRequest(str(exc)) from None
 
     def change(self, changes: dict) -> None:
         """New settings; a new turn time or a resume restarts the current turn's clock."""

@@ -11,21 +11,16 @@ import torch
 from rllib_pommer.agents.registry import make_agent
 from rllib_pommer.agents.speaker import SILENCE, radio_act, speaks
 from rllib_pommer.game.constants import RADIO_PRESET, TEAM_PRESET, GameType
-from rllib_pommer.game.engine import Game
 from rllib_pommer.imitation.features import message_features
 from rllib_pommer.imitation.learned import LearnedAgent, RadioAgent
+
+from ..serving.conftest import team_observations
 
 SEAT = 2
 
 
-def _observations(config, steps: int = 12, seed: int = 4):
-    game, rng = Game(config), np.random.default_rng(seed)
-    obs = game.reset(seed)
-    seen = []
-    for _ in range(steps):
-        seen.append(obs.select(SEAT))
-        obs, _, _, _ = game.step(rng.integers(0, 5, size=4))
-    return seen
+def _observations(config, steps: int = 12):
+    return team_observations(SEAT, steps, 4, config)
 
 
 def _agent(path, game_type=GameType.TEAM_RADIO, seed=0):

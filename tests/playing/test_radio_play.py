@@ -91,7 +91,7 @@ def test_the_server_takes_words_with_the_token_and_refuses_bad_ones(tmp_path):
     refusals, untouched, accepted, frame, state = run_server(scenario, tmp_path / "r.jsonl",
                                                              spec=RADIO)
     assert [status for status, _ in refusals] == [400, 400, 400, 400, 403]
-    assert refusals[0][1]["error"] == "words: words: value 8 outside [0, 7]"
+    assert refusals[0][1]["error"] == "words: value 8 outside [0, 7]"
     assert "expected [word, word], got '35'" in refusals[1][1]["error"]
     assert "missing field 'words'" in refusals[2][1]["error"]
     assert "unknown field 'loud'" in refusals[3][1]["error"]
