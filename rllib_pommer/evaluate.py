@@ -1,10 +1,10 @@
 """`python -m rllib_pommer.evaluate --team A --vs B --games N`: the arena.
 
-Plays N Team games (`--variant radio`: TeamRadio, where policies named with the `_words` suffix
-send words) of policy A against policy B on all cores, half of them with A on seats {0, 2}
-and half on {1, 3} (`--fixed-seats`: always {0, 2}), and prints A's win/loss/tie rates with 95%
-Wilson intervals, the mean game length, A's agents lost to their own bombs, and per game who
-killed whom (each team's kills, suicides and team kills: `game/kills.py`). `--records FILE`
+Plays N Team games (`--variant radio`: TeamRadio, where policies named with the `_words` suffix and
+learned radio networks send words) of policy A against policy B on all cores, half of them with A on
+seats {0, 2} and half on {1, 3} (`--fixed-seats`: always {0, 2}), and prints A's win/loss/tie rates
+with 95% Wilson intervals, the mean game length, A's agents lost to their own bombs, and per game
+who killed whom (each team's kills, suicides and team kills: `game/kills.py`). `--records FILE`
 writes one row per game (.jsonl or .csv) with the columns
 
     game, seed, seats_a, result (win/loss/tie for A), length, died, own_bomb_deaths, bombs_laid,

@@ -7,6 +7,10 @@ loopback (unless `--host` says otherwise) and prints its URL first; open it in a
 keys move, space lays a bomb, any other key plays Stop, and so does no key within the turn time
 (`--turn-time SECONDS`, or `wait` to wait for you; also set on the page, with pause).
 
+`--variant radio` plays TeamRadio: the agents hear their teammates' words and speak if they do
+(a `_words` policy, a radio network); the page shows what your teammate says, and the digit keys
+0-7 set the two words you send with every move (the first digit word 1, the next word 2).
+
 The game ends with its result, or as a forfeit when the page is closed (or the command is
 stopped); either way it is saved as a replay (`--out`, default play-<time>.jsonl.gz) for
 `python -m rllib_pommer.replay html|render|verify`, and the command exits. Should `--out` fail
@@ -50,6 +54,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--teammate", help="policy of your teammate (default: --team)")
     parser.add_argument("--seed", type=int, default=0, help="deals the board and the agents' "
                         "random streams, as game 0 of `evaluate --seed`")
+    parser.add_argument("--variant", choices=("team", "radio"), default="team",
+                        help="the game: Team, or TeamRadio with words (default %(default)s)")
     parser.add_argument("--host", default="127.0.0.1", help="address to bind (default: loopback)")
     parser.add_argument("--port", type=int, default=8080, help="0: any free port")
     parser.add_argument("--turn-time", type=_turn_time, default=DEFAULT_TURN_TIME,
@@ -67,7 +73,8 @@ def main(argv: list[str] | None = None) -> int:
         if not 0 <= args.reconnect <= 3600:
             raise ValueError(f"--reconnect must be 0..3600 seconds, got {args.reconnect}")
         check_output(out, "--out")
-        game = HumanGame(PlaySpec(args.team, args.vs, args.seat, args.teammate, args.seed))
+        game = HumanGame(PlaySpec(args.team, args.vs, args.seat, args.teammate, args.seed,
+                                  args.variant))
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

@@ -23,3 +23,30 @@ def public_games() -> Path:
 @pytest.fixture(scope="session")
 def radio_games() -> Path:
     return RADIO_GAMES
+
+
+@pytest.fixture
+def radio_policy(tmp_path):
+    """`radio_policy(greedy)`: the path of a learned policy file whose weights are a `RadioNet`
+    that really hears and speaks: the shipped imitation net's trunk and moves, with seeded random
+    hearing and word heads (a trained radio net's shape, no training needed)."""
+    def write(greedy: bool = False, seed: int = 0) -> Path:
+        import torch
+
+        from rllib_pommer.agents.registry import resolve_policy
+        from rllib_pommer.imitation.learned import load_policy_net
+
+        net = load_policy_net(resolve_policy("imitation").file("weights"), radio=True)
+        generator = torch.Generator().manual_seed(seed)
+        with torch.no_grad():  # word logits of a few units: sampled words vary
+            for weight, scale in ((net.hear.weight, 1.0), (net.speak.weight, 0.05),
+                                  (net.speak.bias, 1.0)):
+                weight.copy_(scale * torch.randn(weight.shape, generator=generator))
+        folder = tmp_path / f"radio_{'greedy' if greedy else 'sampling'}_{seed}"
+        folder.mkdir()
+        torch.save(net.state_dict(), folder / "pi.pt")
+        path = folder / "radio.toml"
+        path.write_text(f'kind = "learned"\nweights = "pi.pt"\ngreedy = {str(greedy).lower()}\n'
+                        f'description = "a radio net for tests"\n')
+        return path
+    return write

@@ -3,6 +3,8 @@
 An agent is reset for each new game with its seat, the game type and a numpy Generator (the only
 source of its randomness, so a seeded game is reproducible), then asked for one action per step on
 its own `Observation` (leading shape ()). Dead agents are not asked; the engine plays Stop for them.
+In TeamRadio an agent may also listen and speak, with the optional `hear` and `words` that
+`speaker.radio_act` calls around `act`.
 """
 
 from __future__ import annotations

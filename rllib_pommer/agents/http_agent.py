@@ -19,6 +19,11 @@ else a remote agent gets wrong (an HTTP error, an answer that is not JSON, an ac
 integer 0..5) raises a ValueError naming the address, the seat and the answer: that is a broken
 agent, not a slow one, and playing Stop instead would silently bias the results it is measured by.
 
+In a TeamRadio game (game type 3, as in the 2019 competition) the agent takes part in the channel
+of `speaker.radio_act`: what it hears goes out as the observation's `message`, and the server
+may answer a plain move (silence) or `[move, word, word]` with words 0..7; anything else is an
+error as above. A timed-out turn is Stop and silence.
+
 Every game starts with /init_agent, carrying our optional `seed`: the state of the seat's
 Generator, so one of our policies served by `python -m rllib_pommer.serve` plays exactly as it
 would in process. No /episode_end is sent: the Agent protocol has no end-of-game call.
@@ -40,9 +45,16 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import requests
 
-from ..game.constants import NUM_ACTIONS, NUM_AGENTS, Action
+from ..game.constants import (
+    NUM_ACTIONS,
+    NUM_AGENTS,
+    RADIO_NUM_WORDS,
+    RADIO_VOCAB_SIZE,
+    Action,
+    has_radio,
+)
 from ..game.observation import Observation
-from ..game.serialize import dump_observation
+from ..game.serialize import dump_observation, load_words
 
 if TYPE_CHECKING:
     from .registry import PolicySpec
@@ -52,6 +64,7 @@ DEFAULT_TIMEOUT = 0.15  # the competition runner's wait for an action
 INIT_TIMEOUT = 10.0  # /init_agent may load a model; only /action is held to the game's pace
 ACTION_SPACE = "6"  # Discrete(6), JSON-encoded as the competition's runner sent it
 PARAMS = ("host", "port", "timeout")
+SILENCE = (0,) * RADIO_NUM_WORDS
 
 logger = logging.getLogger(__name__)
 
@@ -92,13 +105,16 @@ class HttpAgent:
         self.session = requests.Session()  # keep-alive: one connection per seat, not per step
         self.agent_id = -1
         self.address = ""  # host:port of the current seat's server
+        self.radio = False  # a TeamRadio game: the message goes out, words may come back
+        self.heard = self.said = SILENCE
 
     @classmethod
     def from_spec(cls, spec: PolicySpec) -> HttpAgent:
         return cls(*_params(spec.params, f"policy file {spec.path}"))
 
     def reset(self, agent_id: int, game_type: int, rng: np.random.Generator) -> None:
-        self.agent_id = agent_id
+        self.agent_id, self.radio = agent_id, has_radio(game_type)
+        self.heard = self.said = SILENCE
         self.address = f"{self.host}:{self.ports[agent_id * len(self.ports) // NUM_AGENTS]}"
         body = {"id": json.dumps(agent_id), "game_type": json.dumps(game_type),
                 "seed": json.dumps(rng.bit_generator.state)}
@@ -115,7 +131,9 @@ class HttpAgent:
                 f"{self._who()} has since been seated by another seat or game: a server plays one "
                 f"seat of one game at a time, so give each seat its own port and play the games "
                 f"one after another")
-        body = {"obs": json.dumps(dump_observation(obs)), "action_space": ACTION_SPACE}
+        obs_dict = dump_observation(obs, self.heard if self.radio else None)
+        body = {"obs": json.dumps(obs_dict), "action_space": ACTION_SPACE}
+        self.said = SILENCE
         try:
             response = self.session.post(self._url("action"), json=body, timeout=self.timeout)
         except (requests.Timeout, requests.ConnectionError) as exc:
@@ -124,10 +142,36 @@ class HttpAgent:
             return int(Action.STOP)
         answer = self._answer(response, "action")
         action = answer.get("action") if isinstance(answer, dict) else None
-        if isinstance(action, bool) or not isinstance(action, int) or not 0 <= action < NUM_ACTIONS:
+        if self.radio and isinstance(action, list):
+            move, self.said = self._radio_action(action, response.text)
+            return move
+        if not _is_move(action):
             raise ValueError(f"{self._who()} answered /action with {response.text!r:.200}; "
-                             f"expected {{\"action\": <integer 0..{NUM_ACTIONS - 1}>}}")
+                             f"expected {{\"action\": {self._expected()}}}")
         return action
+
+    def hear(self, message) -> None:
+        """TeamRadio: the teammate's last words, sent with the next observation."""
+        self.heard = tuple(int(w) for w in message)
+
+    def words(self) -> tuple[int, ...]:
+        """TeamRadio: the words of the last answer (silence for a plain move or none)."""
+        return self.said
+
+    def _radio_action(self, action: list, text: str) -> tuple[int, tuple[int, ...]]:
+        """A TeamRadio answer's [move, word, word], checked."""
+        try:
+            if len(action) != 1 + RADIO_NUM_WORDS or not _is_move(action[0]):
+                raise ValueError("not [move, word, word]")
+            return action[0], load_words(action[1:], "words")
+        except ValueError as exc:
+            raise ValueError(f"{self._who()} answered /action with {text!r:.200} ({exc}); "
+                             f"expected {{\"action\": {self._expected()}}}") from None
+
+    def _expected(self) -> str:
+        move = f"<integer 0..{NUM_ACTIONS - 1}>"
+        return f"{move} or [{move}, <word 0..{RADIO_VOCAB_SIZE - 1}>, <word>]" if self.radio \
+            else move
 
     def _url(self, endpoint: str) -> str:
         return f"http://{self.address}/{endpoint}"
@@ -144,3 +188,7 @@ class HttpAgent:
         except ValueError:
             raise ValueError(f"{self._who()} answered /{endpoint} with {response.text!r:.200}, "
                              f"which is not JSON") from None
+
+
+def _is_move(action: Any) -> bool:
+    return isinstance(action, int) and not isinstance(action, bool) and 0 <= action < NUM_ACTIONS

@@ -14,7 +14,8 @@ Jitter Correction, the Action Filter, or both. The wrappers are always stacked i
 `FILTERS`, jitter inside and action filter outside: the safety veto must have the last word, also
 over the SimpleAgent moves that jitter correction injects (SimpleAgent walks into blasts too).
 A last suffix `_words` (`simple_words`, `X_action_words`) makes the agent speak in TeamRadio games
-(`speaker.Speaker`: seeded random words beside unchanged moves); without it agents are silent.
+(`speaker.Speaker`: seeded random words beside unchanged moves); without it agents are silent,
+but for those that speak themselves (a learned radio network, a remote agent).
 
 The folder is the repository's `policies/` (a wheel's copy of it), or the directory named by
 RLLIB_POMMER_POLICIES: `shipped.data_dir` finds it from any working directory.

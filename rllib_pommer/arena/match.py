@@ -7,9 +7,11 @@ their scheduling.
 Team A sits on seats {0, 2} in even games and {1, 3} in odd ones (the reference shows a seat
 effect: the SimpleAgent mirror wins 50.6% from {0, 2} against 34.6% from {1, 3}), unless seats are
 fixed.
-In TeamRadio games (`MatchSpec.variant` "radio") every agent sends words with its move, silence
-(0, 0) unless it speaks (`agents/speaker.py`); replays record a speaker's `[move, word, word]`
-and a silent or dead agent's plain move, as the reference's runner does.
+In TeamRadio games (`MatchSpec.variant` "radio") every agent plays its turn through
+`agents/speaker.radio_act`: it hears its teammate's last words (`Games.message`) and sends words
+with its move, silence (0, 0) unless it speaks (a `_words` agent, a radio network); replays
+record a speaker's `[move, word, word]` and a silent or dead agent's plain move, as the
+reference's runner does.
 """
 
 from __future__ import annotations
@@ -25,7 +27,7 @@ import torch
 from ..agents.base import innermost
 from ..agents.http_agent import HttpAgent
 from ..agents.registry import make_agent
-from ..agents.speaker import Speaker, words_of
+from ..agents.speaker import as_passed, radio_act
 from ..game.blast import mark_blast
 from ..game.constants import RADIO_NUM_WORDS, Action, GameConfig, has_radio, has_teams, preset
 from ..game.engine import Games
@@ -109,8 +111,10 @@ def _killed_by_own_bomb(seat: int, cell: tuple[int, int], board: np.ndarray,
     return False
 
 
-def _prefetch_learned(players: list[list], obs, active: np.ndarray) -> None:
-    """One forward pass per learned policy for all its active agents in the chunk."""
+def _prefetch_learned(players: list[list], obs, active: np.ndarray,
+                      message: np.ndarray | None) -> None:
+    """One forward pass per learned policy for all its active agents in the chunk, hearing
+    `message` (N, 4, 2) in TeamRadio."""
     groups: dict = {}
     for g, seats in enumerate(players):
         for s, agent in enumerate(seats):
@@ -121,7 +125,7 @@ def _prefetch_learned(players: list[list], obs, active: np.ndarray) -> None:
                 groups[id(core.policy)][2].append((g, s))
     for policy, agents, rows in groups.values():
         index = tuple(np.array(rows).T)
-        policy.prefetch(agents, obs.select(*index))
+        policy.prefetch(agents, obs.select(*index), None if message is None else message[index])
 
 
 class _GameStats:
@@ -186,14 +190,16 @@ def _play_chunk(spec: MatchSpec, games: Sequence[int],
     state = engine.state
     while not engine.done.all():
         active = engine.alive & ~engine.done[:, None]
-        obs = engine.obs
-        _prefetch_learned(players, obs, active)
+        obs, message = engine.obs, engine.message if radio else None
+        _prefetch_learned(players, obs, active, message)
         actions = np.zeros((n, 4), np.int64)
         words = np.zeros((n, 4, RADIO_NUM_WORDS), np.int64)
         for g, s in zip(*np.nonzero(active), strict=True):
-            actions[g, s] = players[g][s].act(obs.select(g, s))
             if radio:
-                words[g, s] = words_of(players[g][s])
+                actions[g, s], *words[g, s] = radio_act(players[g][s], obs.select(g, s),
+                                                        message[g, s])
+            else:
+                actions[g, s] = players[g][s].act(obs.select(g, s))
         was_done = engine.done.copy()
         kept = stats.before_step(state, active, actions)
         engine.step(np.concatenate([actions[..., None], words], axis=-1) if radio else actions)
@@ -218,9 +224,8 @@ def _play_chunk(spec: MatchSpec, games: Sequence[int],
 def _as_passed(players: list, active: np.ndarray, moves: np.ndarray, words: np.ndarray) -> list:
     """One radio game's actions as the reference's runner passes them: a speaker's
     [move, word, word], a silent or dead agent's plain move."""
-    return [[int(moves[s]), *map(int, words[s])]
-            if active[s] and isinstance(players[s], Speaker) else int(moves[s])
-            for s in range(len(players))]
+    return [as_passed(players[s], (int(moves[s]), *map(int, words[s]))) if active[s]
+            else int(moves[s]) for s in range(len(players))]
 
 
 def _agent_mix(spec: MatchSpec, game: int) -> str:

@@ -16,8 +16,9 @@ form, `team.OBSERVATIONS`).
 
 `game="radio"` plays TeamRadio (also registered as `rllib_pommer/PommeRadio-v0`): the trained
 agent's action is [move, word, word] (`MultiDiscrete([6, 8, 8])`) and it observes its teammate's
-words (`team.py`); the named policies on the other seats send (0, 0) unless their name asks them to
-speak (`_words`, `agents/speaker.py`).
+words (`team.py`); the named policies on the other seats play their turns through
+`agents/speaker.radio_act`: they hear their teammates' words (the trained agent's, for the seat
+across) and send (0, 0) unless they speak (a `_words` name, a radio network).
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ from copy import deepcopy
 import gymnasium as gym
 
 from ..agents.registry import make_agent
-from ..agents.speaker import words_of
+from ..agents.speaker import as_passed, radio_act
 from ..game.constants import MAX_STEPS, NUM_AGENTS
 from .team import RENDER_MODES, MultiAgentTeam, check_action, check_render_mode
 
@@ -74,12 +75,12 @@ class PommeTeamEnv(gym.Env):
     def step(self, action):
         if self.seat not in self.team.agents:
             raise ValueError("step: the trained agent's episode is over; call reset()")
-        rows = self.team.last_observation
+        rows, heard = self.team.last_observation, self.team.game.message
         actions = {self.seat: check_action(action, self.seat, self.team.radio)}  # before the others
         for s, agent in self.others.items():
             if s in self.team.agents:
-                move = agent.act(rows.select(s))
-                actions[s] = [move, *words_of(agent)] if self.team.radio else move
+                actions[s] = as_passed(agent, radio_act(agent, rows.select(s), heard[s])) \
+                    if self.team.radio else agent.act(rows.select(s))
         obs, rewards, terminateds, _, infos = self.team.step(actions)
         return obs[self.seat], rewards[self.seat], terminateds[self.seat], False, infos[self.seat]
 

@@ -180,17 +180,22 @@ def load_state(d: Mapping, out: GameState | None = None, index: int = 0) -> Game
     return state
 
 
+def load_words(pair: Any, where: str) -> tuple[int, ...]:
+    """One agent's two words (a state's entry, a `message`, what an agent says): [word, word],
+    each an integer 0..7; a ValueError names `where` and the value."""
+    if isinstance(pair, str) or not isinstance(pair, Sequence | np.ndarray) \
+            or len(pair) != RADIO_NUM_WORDS:
+        raise ValueError(f"{where}: expected [word, word], got {pair!r:.80}")
+    return tuple(_int(w, where, 0, RADIO_VOCAB_SIZE - 1) for w in pair)
+
+
 def _words_by_agent(value: Any) -> np.ndarray:
     """A state's `radio_from_agent`: four [word, word] pairs, each word 0..7."""
     where = "state.radio_from_agent"
     if not isinstance(value, Sequence) or len(value) != NUM_AGENTS:
         raise ValueError(f"{where}: expected {NUM_AGENTS} pairs of words, got {value!r:.80}")
-    out = np.zeros((NUM_AGENTS, RADIO_NUM_WORDS), np.uint8)
-    for i, pair in enumerate(value):
-        if not isinstance(pair, Sequence) or len(pair) != RADIO_NUM_WORDS:
-            raise ValueError(f"{where}[{i}]: expected [word, word], got {pair!r:.80}")
-        out[i] = [_int(w, f"{where}[{i}]", 0, RADIO_VOCAB_SIZE - 1) for w in pair]
-    return out
+    return np.array([load_words(pair, f"{where}[{i}]") for i, pair in enumerate(value)],
+                    np.uint8).reshape(NUM_AGENTS, RADIO_NUM_WORDS)
 
 
 def dump_state(state: GameState, index: int = 0, game_type: int = GameType.TEAM) -> dict:

@@ -15,6 +15,10 @@ Many agents of one policy can share one forward pass: `prefetch` computes the ac
 of agents from their observations and parks each one on its agent, whose next `act` returns it.
 The arena uses this to batch inference across the games a worker plays in lockstep; wrappers
 (action filter, jitter correction) still call `act` as usual.
+
+A TeamRadio network (`RadioNet`) is played by a `RadioAgent`, which takes part in the channel of
+`agents/speaker.radio_act`: it hears its teammate's words (the net's message input; silence
+until then, and always in Team) and speaks the net's two words. A Team network stays silent.
 """
 
 from __future__ import annotations
@@ -35,7 +39,8 @@ from ..agents.registry import (
     registered,
     resolve_policy,
 )
-from ..game.constants import NUM_ACTIONS, RADIO_NUM_WORDS
+from ..agents.speaker import SILENCE
+from ..game.constants import NUM_ACTIONS, RADIO_NUM_WORDS, RADIO_VOCAB_SIZE, has_radio
 from ..game.observation import Observation
 from .features import featurize, message_features
 from .network import PommerNet, RadioNet, build_net, is_radio_state, load_weights
@@ -70,19 +75,22 @@ class LearnedPolicy:
         self.net = net
         self.greedy = greedy
         self.source = source
+        self.radio = isinstance(net, RadioNet)
 
     @torch.no_grad()
-    def probabilities(self, obs: Observation) -> np.ndarray:
-        """Action probabilities (B, 6) for observations with leading shape (B,). A TeamRadio
-        network (`RadioNet`) plays its moves alone here, hearing silence: the Agent protocol
-        hands agents no message and takes no words from them."""
+    def logits(self, obs: Observation, messages: np.ndarray | None = None) -> torch.Tensor:
+        """The net's logits for observations with leading shape (B,): (B, 6), or a `RadioNet`'s
+        (B, 6 + 16) hearing `messages` (B, 2) (default: silence, what it hears in Team)."""
         planes = torch.from_numpy(featurize(obs))
-        if isinstance(self.net, RadioNet):
-            silence = message_features(np.zeros((len(planes), RADIO_NUM_WORDS), np.int64))
-            logits = self.net(planes, torch.from_numpy(silence))[:, :NUM_ACTIONS]
-        else:
-            logits = self.net(planes)
-        return torch.softmax(logits, dim=-1).numpy().astype(np.float64)
+        if not self.radio:
+            return self.net(planes)
+        if messages is None:
+            messages = np.zeros((len(planes), RADIO_NUM_WORDS), np.int64)
+        return self.net(planes, torch.from_numpy(message_features(messages)))
+
+    def probabilities(self, obs: Observation, messages: np.ndarray | None = None) -> np.ndarray:
+        """Move probabilities (B, 6) for observations with leading shape (B,) (`logits`)."""
+        return _softmax(self.logits(obs, messages)[:, :NUM_ACTIONS])
 
     def choose(self, probs: np.ndarray, rngs: Sequence[np.random.Generator]) -> np.ndarray:
         if self.greedy:
@@ -92,30 +100,78 @@ class LearnedPolicy:
         u = np.array([rng.random() for rng in rngs]) * cdf[:, -1]
         return np.minimum((cdf < u[:, None]).sum(axis=-1), probs.shape[-1] - 1)
 
-    def prefetch(self, agents: Sequence[LearnedAgent], obs: Observation) -> None:
-        """Decide for `agents` (row i sees `obs.select(i)`) in one forward pass."""
-        actions = self.choose(self.probabilities(obs), [a.rng for a in agents])
-        for agent, action in zip(agents, actions, strict=True):
-            agent.pending = int(action)
+    def prefetch(self, agents: Sequence[LearnedAgent], obs: Observation,
+                 messages: np.ndarray | None = None) -> None:
+        """Decide for `agents` (row i sees `obs.select(i)` and hears `messages[i]`, by default
+        what the agent last heard) in one forward pass: each agent's move, and the words of
+        those that speak (`LearnedAgent.speaking`), drawn after the move from its own stream."""
+        if messages is None:
+            messages = np.array([agent.heard for agent in agents], np.int64)
+        logits = self.logits(obs, messages)
+        moves = self.choose(_softmax(logits[:, :NUM_ACTIONS]), [a.rng for a in agents])
+        said = [SILENCE] * len(agents)
+        talkers = [i for i, agent in enumerate(agents) if agent.speaking]
+        if talkers:
+            words = _softmax(logits[talkers, NUM_ACTIONS:].reshape(
+                len(talkers), RADIO_NUM_WORDS, RADIO_VOCAB_SIZE))
+            rngs = [agents[i].rng for i in talkers]
+            chosen = np.stack([self.choose(words[:, k], rngs) for k in range(RADIO_NUM_WORDS)], -1)
+            for i, pair in zip(talkers, chosen, strict=True):
+                said[i] = tuple(int(w) for w in pair)
+        for agent, move, words_ in zip(agents, moves, said, strict=True):
+            agent.pending = (int(move), words_)
+
+
+def _softmax(logits: torch.Tensor) -> np.ndarray:
+    return torch.softmax(logits, dim=-1).numpy().astype(np.float64)
 
 
 class LearnedAgent:
-    """The Agent protocol over a shared `LearnedPolicy`."""
+    """The Agent protocol over a shared `LearnedPolicy`. A Team net neither hears nor speaks:
+    in TeamRadio it is silent (`agents/speaker.radio_act`)."""
+
+    speaking = False  # whether `prefetch` draws words for it
 
     def __init__(self, policy: LearnedPolicy):
         self.policy = policy
         self.rng = np.random.default_rng(0)
-        self.pending: int | None = None
+        self.pending: tuple[int, tuple[int, ...]] | None = None  # (move, words) decided
+        self.heard: tuple[int, ...] = SILENCE
+        self.said: tuple[int, ...] = SILENCE
 
     def reset(self, agent_id: int, game_type: int, rng: np.random.Generator) -> None:
         self.rng = rng
         self.pending = None
+        self.heard = self.said = SILENCE
 
     def act(self, obs: Observation) -> int:
         if self.pending is None:
             self.policy.prefetch([self], Observation(*(f[None] for f in obs)))
-        action, self.pending = self.pending, None
-        return action
+        (move, self.said), self.pending = self.pending, None
+        return move
+
+
+class RadioAgent(LearnedAgent):
+    """A `LearnedAgent` over a `RadioNet`: in TeamRadio it hears its teammate's words (fed as the
+    net's message instead of silence) and speaks the net's two words (argmax when greedy, else
+    sampled from its own stream after its move). In Team it plays its moves hearing silence."""
+
+    def reset(self, agent_id: int, game_type: int, rng: np.random.Generator) -> None:
+        super().reset(agent_id, game_type, rng)
+        self.speaking = has_radio(game_type)
+
+    def hear(self, message: Sequence[int]) -> None:
+        """The teammate's last words, heard by this step's forward pass."""
+        self.heard = tuple(int(w) for w in message)
+
+    def words(self) -> tuple[int, ...]:
+        """The words the net chose with this step's move."""
+        return self.said
+
+
+def learned_agent(policy: LearnedPolicy) -> LearnedAgent:
+    """The agent playing `policy`: a `RadioAgent` for a radio net."""
+    return RadioAgent(policy) if policy.radio else LearnedAgent(policy)
 
 
 # A policy's path and its file's other keys (but `greedy`) -> its network and the file it read.
@@ -127,7 +183,7 @@ def register_learned_kind(kind: str, key: str, load: Loader) -> None:
     """Make policy files of `kind` playable as learned agents: `key` names the path (relative to
     the file) that `load` reads a network from, given the file's other keys."""
     LOADERS[kind] = (key, load)
-    register_kind(kind, lambda spec: LearnedAgent(_shared_policy(
+    register_kind(kind, lambda spec: learned_agent(_shared_policy(
         kind, spec.file(key), bool(spec.params.get("greedy", False)), _options(spec, key))))
 
 

@@ -10,17 +10,19 @@
                     {"type": "refused", "error": ...} and is closed.
     POST /move      {"action": 0..5 or "stop|up|down|left|right|bomb", "step": T}, with the
                     seat's token in the X-Seat-Token header: the person's action for step T
+    POST /words     {"words": [w1, w2]} (TeamRadio, each 0..7), token too: the words the person
+                    sends with every move from the next step on
     POST /settings  {"turn_time": seconds or "wait", "paused": true|false} (either key), token too
     GET  /state     the game so far, as JSON (step, every step's actions, result, settings)
 
-Malformed moves and settings get 400 naming the field and value, a request without the seat's
-token 403, a move that cannot be played now 409 (another step, paused, a dead agent, the game
-over); none of them touches the game. The clock plays a step as soon as the person moves, or with
-Stop when the turn time runs out ("wait": never); it starts when a page takes the seat and stops
-while paused. Once the person's agent is dead the others play on at the turn time (`WATCH_STEP`
-under "wait"). When the game ends, by a result, a forfeit or an agent failing (a remote agent's
-malformed answer, say), the replay is written and `done` set. Agents act in a worker thread, so a
-slow remote agent never stalls the page's requests.
+Malformed moves, words and settings get 400 naming the field and value, a request without the seat's
+token 403, a move that cannot be played now 409 (another step, paused, a dead agent, the game over;
+so do words in a Team game); none of them touches the game. The clock plays a step as soon as the
+person moves, or with Stop when the turn time runs out ("wait": never); it starts when a page takes
+the seat and stops while paused. Once the person's agent is dead the others play on at the turn time
+(`WATCH_STEP` under "wait"). When the game ends, by a result, a forfeit or an agent failing (a
+remote agent's malformed answer, say), the replay is written and `done` set. Agents act in a worker
+thread, so a slow remote agent never stalls the page's requests.
 """
 
 from __future__ import annotations
@@ -90,6 +92,14 @@ def parse_move(body: Any) -> tuple[int, int]:
     if isinstance(step, bool) or not isinstance(step, int) or step < 0:
         raise BadRequest(f"move: step {json.dumps(step):.60} is not a step number (0, 1, ...)")
     return action, step
+
+
+def parse_words(body: Any) -> list:
+    """The `words` of a words body (checked by the game: `HumanGame.say`)."""
+    _fields(body, ("words",), "words")
+    if "words" not in body:
+        raise BadRequest('words: missing field \'words\', e.g. {"words": [3, 5]}')
+    return body["words"]
 
 
 def parse_turn_time(value: Any) -> float | None:
@@ -210,6 +220,18 @@ class Table:
         self.move = action
         self.wake.set()
 
+    def take_words(self, words: list) -> None:
+        """The person's words for the steps to come; a step being played may already take them."""
+        if self.game.over:
+            raise Refused(409, f"the game is over (step {self.game.step}); no more words")
+        if not self.game.radio:
+            raise Refused(409, "this is a Team game: words are sent in TeamRadio only "
+                               "(play --variant radio)")
+        try:
+            self.game.say(words)
+        except ValueError as exc:
+            raise BadRequest(str(exc)) from None
+
     def change(self, changes: dict) -> None:
         """New settings; a new turn time or a resume restarts the current turn's clock."""
         self.turn_time = changes.get("turn_time", self.turn_time)
@@ -286,6 +308,8 @@ class Table:
         record = self.game.recorder.record
         return {"seat": self.game.spec.seat, "players": self.game.players,
                 "step": self.game.step, "actions": [s["actions"] for s in record["steps"]],
+                **({"full_actions": [s["full_actions"] for s in record["steps"]]}
+                   if self.game.radio else {}),
                 "over": self.game.over, "result": self.game.result(),
                 "forfeit": self.game.forfeit, "stopped": self.game.stopped, **self.settings(),
                 "replay": str(self.saved) if self.saved else None}
@@ -323,10 +347,13 @@ def _page_data(table: Table) -> dict:
     spec = game.spec
     players = ["you" if p == HUMAN else p for p in game.players]
     partner = players[spec.partner_seat]
+    radio = "TeamRadio: " if game.radio else ""
     return {
-        "title": f"You (agent {spec.seat}) and {partner} against {spec.vs} · seed {spec.seed}",
+        "title": f"{radio}You (agent {spec.seat}) and {partner} against {spec.vs} · "
+                 f"seed {spec.seed}",
         "board": board_assets(game.game.config.board_size),
         "players": players,
+        "radio": game.radio,
     }
 
 
@@ -367,6 +394,13 @@ async def move(request: web.Request) -> web.Response:
     return web.json_response({"accepted": {"action": Action(action).name.lower(), "step": step}})
 
 
+async def words(request: web.Request) -> web.Response:
+    table = request.app[TABLE]
+    table.check_token(request)
+    table.take_words(parse_words(parse_body(await request.read())))
+    return web.json_response({"saying": list(table.game.words)})
+
+
 async def settings(request: web.Request) -> web.Response:
     table = request.app[TABLE]
     table.check_token(request)
@@ -394,6 +428,7 @@ def make_app(game: HumanGame, out: Path, turn_time: float | None,
     app.router.add_get("/", page)
     app.router.add_get("/seat", seat)
     app.router.add_post("/move", move)
+    app.router.add_post("/words", words)
     app.router.add_post("/settings", settings)
     app.router.add_get("/state", state)
     return app

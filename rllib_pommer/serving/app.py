@@ -80,8 +80,9 @@ async def init_agent(request: web.Request) -> web.Response:
 async def action(request: web.Request) -> web.Response:
     host = request.app[HOST]
     body = await _body(request)
-    obs = parse_action(body, host.seated("/action").agent_id)
-    return web.json_response({"action": host.act(obs)})
+    seat = host.seated("/action")
+    obs, message = parse_action(body, seat.agent_id, seat.game_type)
+    return web.json_response({"action": host.act(obs, message)})
 
 
 async def episode_end(request: web.Request) -> web.Response:

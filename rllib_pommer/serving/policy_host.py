@@ -3,16 +3,20 @@
 The protocol carries no seed, so unless the caller sends our optional one, game k started by this
 host draws its agent's randomness from `default_rng([seed, k])`: a restarted server with the same
 `--seed` replays the same games when asked the same observations.
+
+In a TeamRadio game the agent plays each turn through `agents/speaker.radio_act`: it hears the
+observation's `message` and answers [move, word, word] (silence unless it speaks).
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from typing import NamedTuple
 
 import numpy as np
 
 from ..agents.registry import make_agent
+from ..agents.speaker import radio_act
 from ..game.constants import NUM_AGENTS, TEAM_PRESET
 from ..game.engine import Game
 from ..game.observation import Observation
@@ -64,8 +68,11 @@ class PolicyHost:
             raise BadRequest(f"{endpoint} before /init_agent: no game is being played")
         return self.seat
 
-    def act(self, obs: Observation) -> int:
-        return int(self.agent.act(obs))
+    def act(self, obs: Observation, message: Sequence[int] | None = None) -> int | list[int]:
+        """The agent's move; in TeamRadio (`message`: the words it hears) [move, word, word]."""
+        if message is None:
+            return int(self.agent.act(obs))
+        return list(radio_act(self.agent, obs, message))
 
     def end_game(self) -> None:
         """The competition's runner seated its agents once and ended every game with

@@ -1,22 +1,24 @@
 """Decoding the request bodies of the 2018 competition's agent protocol.
 
-Every body is a JSON object whose values are themselves JSON-encoded strings (`{"id": "0"}`), as
-the competition's runner sent them. Each decoder raises `BadRequest` naming the field and what is
-wrong with it, so a caller sees its own mistake instead of a server error, and the server keeps
-running.
+Every body is a JSON object whose values are themselves JSON-encoded strings (`{"id": "0"}`), as the
+competition's runner sent them. A TeamRadio game (game type 3, the 2019 competition's) adds the
+observation's `message`, the teammate's last two words. Each decoder raises `BadRequest` naming the
+field and what is wrong with it, so a caller sees its own mistake instead of a server error, and the
+server keeps running.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 from collections.abc import Mapping
 from typing import Any, NamedTuple
 
 import numpy as np
 
-from ..game.constants import NUM_AGENTS, GameType, teammate_of
+from ..game.constants import NUM_AGENTS, GameType, has_radio, has_teams, teammate_of
 from ..game.observation import Observation
-from ..game.serialize import load_observation
+from ..game.serialize import load_observation, load_words
 
 # Bit generators whose `state` is plain JSON (ints only), so a caller's stream can be sent exactly.
 JSON_STATE_BIT_GENERATORS = {cls.__name__: cls for cls in (np.random.PCG64, np.random.PCG64DXSM)}
@@ -24,6 +26,9 @@ JSON_STATE_BIT_GENERATORS = {cls.__name__: cls for cls in (np.random.PCG64, np.r
 
 class BadRequest(ValueError):
     """A malformed request: answered with HTTP 400 and this message."""
+
+
+GAME_TYPES = range(min(GameType), max(GameType) + 1)
 
 
 class InitAgent(NamedTuple):
@@ -76,7 +81,10 @@ def _integer(value: Any, key: str, allowed: range | None = None) -> int:
 
 def rng_from_seed(seed: Any) -> np.random.Generator:
     """Our extension's `seed`: a non-negative integer (fed to `default_rng`) or a numpy
-    bit-generator state object, which continues the caller's own stream exactly."""
+    bit-generator state object, which continues the caller's own stream exactly. A state does not
+    carry the caller's seed sequence, which child streams (`spawn`: the filters', a `_words`
+    agent's words) come from; the served generator's is derived from the state, so the same state
+    gives the same children on every server start (not the caller's own children)."""
     if isinstance(seed, dict):
         name = seed.get("bit_generator")
         cls = JSON_STATE_BIT_GENERATORS.get(name) if isinstance(name, str) else None
@@ -85,7 +93,8 @@ def rng_from_seed(seed: Any) -> np.random.Generator:
                 f"field 'seed': bit generator {seed.get('bit_generator')!r} is not one of "
                 f"{sorted(JSON_STATE_BIT_GENERATORS)}"
             )
-        bit_generator = cls()
+        digest = hashlib.sha256(json.dumps(seed, sort_keys=True).encode()).digest()
+        bit_generator = cls(np.random.SeedSequence(int.from_bytes(digest, "little")))
         try:
             bit_generator.state = seed
         except (TypeError, ValueError, KeyError, OverflowError) as exc:
@@ -98,27 +107,39 @@ def rng_from_seed(seed: Any) -> np.random.Generator:
 
 def parse_init_agent(body: Mapping[str, Any]) -> InitAgent:
     agent_id = _integer(_decoded(body, "id"), "id", range(NUM_AGENTS))
-    game_type = _integer(_decoded(body, "game_type"), "game_type", range(1, 3))
+    game_type = _integer(_decoded(body, "game_type"), "game_type", GAME_TYPES)
     seed = _decoded(body, "seed", required=False)
     return InitAgent(agent_id, game_type, None if seed is None else rng_from_seed(seed))
 
 
-def parse_action(body: Mapping[str, Any], agent_id: int) -> Observation:
-    """The observation of `/action`, for the agent seated by `/init_agent`. `action_space` is
-    ignored: the Pommerman action space is always Discrete(6)."""
+class ActionRequest(NamedTuple):
+    """A decoded `/action` body."""
+    obs: Observation
+    message: tuple[int, ...] | None  # TeamRadio: the words the agent hears; None in other games
+
+
+def parse_action(body: Mapping[str, Any], agent_id: int, game_type: int) -> ActionRequest:
+    """The observation of `/action` (with its `message` in TeamRadio), for the seat of
+    `/init_agent`. `action_space` is ignored: an agent's move is always one of six."""
     obs = _decoded(body, "obs")
     try:
         observation = load_observation(obs, agent_id)
+        message = load_words(obs.get("message"), f"observation of agent {agent_id}.message") \
+            if has_radio(game_type) else None
     except (ValueError, OverflowError) as exc:
         raise BadRequest(str(exc)) from None
-    # The only trace of the seat in an observation: catches two seats sharing one server.
+    _check_teammate(obs, observation, agent_id)
+    return ActionRequest(observation, message)
+
+
+def _check_teammate(obs: Mapping[str, Any], observation: Observation, agent_id: int) -> None:
+    """The only trace of the seat in an observation: catches two seats sharing one server."""
     teammate, expected = obs.get("teammate"), teammate_of(agent_id, GameType.TEAM)
-    if observation.game_type == GameType.TEAM and teammate is not None and teammate != expected:
+    if has_teams(observation.game_type) and teammate is not None and teammate != expected:
         raise BadRequest(
             f"observation has teammate {teammate!r}, but agent {agent_id}'s teammate is "
             f"{expected}: one server plays one seat, so two seats need two servers"
         )
-    return observation
 
 
 def parse_episode_end(body: Mapping[str, Any]) -> float:

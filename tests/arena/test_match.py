@@ -7,7 +7,7 @@ import json
 
 import pytest
 
-from rllib_pommer.arena.match import MatchSpec, play_match
+from rllib_pommer.arena.match import MatchSpec, play_match, record_games
 from rllib_pommer.arena.rates import wilson
 from rllib_pommer.arena.records import summarise, write_records
 from rllib_pommer.evaluate import main
@@ -114,6 +114,34 @@ def test_radio_matches_play_the_team_games_and_replays_keep_the_words(tmp_path, 
         MatchSpec("simple", "simple", 1, variant="ffa")
     with pytest.raises(ValueError, match="unknown game preset 'radi'"):
         MatchSpec("simple", "simple", 1, variant="radi")
+
+
+def _words_sent(replay: dict, seats) -> list[tuple]:
+    """The words `seats` sent over a replay, step by step (a plain move: silence)."""
+    return [tuple(a[1:]) if isinstance(a, list) else (0, 0)
+            for step in replay["steps"] for s, a in enumerate(step["full_actions"]) if s in seats]
+
+
+def test_a_radio_net_speaks_and_hears_in_the_arena_reproducibly(radio_policy):
+    """A learned radio network plays TeamRadio through `radio_act`: its recorded words are not
+    silence, the same seed gives the same games and words, and what its teammate said reaches
+    its next observation. Its turns are decided in one forward pass per chunk, and a game's
+    turns do not depend on its chunk (game 0 alone equals game 0 played beside game 1)."""
+    spec = MatchSpec(str(radio_policy(greedy=False)), "simple", games=2, seed=3,
+                     variant="radio")
+    replays = record_games(spec, 2, observations=True)
+    for replay in replays:
+        words = _words_sent(replay, replay["seats_a"])
+        assert len(set(words)) > 3 and all(0 <= w <= 7 for pair in words for w in pair)
+        for step in replay["steps"]:
+            said = [a[1:] if isinstance(a, list) else [0, 0] for a in step["full_actions"]]
+            assert [o["message"] for o in step["observations"]] == [
+                said[(seat + 2) % 4] for seat in range(4)]
+    assert record_games(spec, 2, observations=True) == replays
+    alone = record_games(spec, 1, observations=True)[0]
+    assert alone["steps"] == replays[0]["steps"]
+    other = record_games(MatchSpec(**{**vars(spec), "seed": 4}), 1)[0]
+    assert _words_sent(other, other["seats_a"]) != _words_sent(replays[0], replays[0]["seats_a"])
 
 
 def _exit_code(args) -> int:

@@ -79,6 +79,25 @@ def test_the_gymnasium_seat_hears_its_teammate():
     assert [_words(talking.step(0)[0]) for _ in range(6)] == heard
 
 
+def test_the_gymnasium_seats_hear_the_trained_agent_through_radio_act(radio_policy):
+    """A radio net across the board hears the trained agent's words of the last step as its
+    message input, and answers with its own words, which the trained agent hears."""
+    env = PommeTeamEnv(game="radio", teammate=str(radio_policy(greedy=True)),
+                       opponents="static", seat=0)
+    env.reset(seed=5)
+    partner = env.others[2]
+    heard = []
+    partner.policy.net.hear.register_forward_hook(
+        lambda _, inputs, out: heard.append(inputs[0].reshape(2, 8).argmax(-1).tolist()))
+    sent = [[3, 5], [7, 1], [0, 6], [2, 2]]
+    replies, said = [], []
+    for words in sent:
+        replies.append(_words(env.step(np.array([0, *words]))[0]))
+        said.append(list(partner.words()))
+    assert heard == [[0, 0]] + sent[:-1]  # each step it hears the words of the step before
+    assert replies == said and any(words != [0, 0] for words in said)
+
+
 def test_team_env_is_unchanged_beside_radio():
     team, radio = MultiAgentTeam({"seed": 3}), MultiAgentTeam({"seed": 3, "game": "radio"})
     assert team.action_spaces[0] == gym.spaces.Discrete(6) and not team.radio

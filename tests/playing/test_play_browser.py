@@ -30,12 +30,12 @@ KEYS = [("ArrowDown", Action.DOWN), ("ArrowLeft", Action.LEFT), ("x", Action.STO
 PLAY = "window.pommerPlay"
 
 
-def start_play(out) -> tuple[subprocess.Popen, str]:
+def start_play(out, *extra: str, team: str = "simple") -> tuple[subprocess.Popen, str]:
     process = subprocess.Popen(
-        [sys.executable, "-m", "rllib_pommer.play", "--team", "simple", "--vs", "static",
+        [sys.executable, "-m", "rllib_pommer.play", "--team", team, "--vs", "static",
          "--seat", str(SEAT), "--seed", "3", "--port", "0", "--turn-time", "wait",
          "--reconnect", "5",
-         "--out", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+         "--out", str(out), *extra], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     first = process.stdout.readline().split()
     if first[:2] != ["play", "at"]:
         process.kill()
@@ -96,3 +96,36 @@ def test_a_game_played_with_key_presses_in_chromium(tmp_path):
     assert verify.stdout.strip().splitlines()[-1] == \
         f"verified 1 games, {len(KEYS)} steps, 0 mismatches"
 
+
+
+def test_radio_words_typed_as_digits_reach_the_game_and_the_teammates_show(tmp_path):
+    """TeamRadio: two digits set the person's two words, which go out with every move; the page
+    shows what the (speaking) teammate said last; a digit is no move."""
+    out = tmp_path / "radio.jsonl.gz"
+    process, url = start_play(out, "--variant", "radio", team="simple_words")
+    try:
+        with Browser(CHROMIUM) as browser:
+            page = browser.open(url)
+            page.wait_for(f"{PLAY} && {PLAY}.ready && {PLAY}.seated()")
+            for key in "35":
+                page.press(key)
+            page.wait_for(f"{PLAY}.saying().join() === '3,5'")
+            page.press("ArrowDown")
+            page.wait_for(f"{PLAY}.step() === 1")
+            page.press("7")  # word 1 again; word 2 stays
+            page.wait_for(f"{PLAY}.saying().join() === '7,5'")
+            page.press("ArrowUp")
+            page.wait_for(f"{PLAY}.step() === 2")
+            state = requests.get(url + "state", timeout=5).json()
+            heard = page.evaluate(f"{PLAY}.heard()")
+            assert page.evaluate(f"{PLAY}.error()") == ""
+            page.close()
+            process.communicate(timeout=30)
+    finally:
+        if process.poll() is None:
+            process.kill()
+    turns = [step[SEAT] for step in state["full_actions"]]
+    assert turns == [[Action.DOWN, 3, 5], [Action.UP, 7, 5]]
+    teammate = state["full_actions"][-1][(SEAT + 2) % 4]
+    assert heard == f"{teammate[1]} {teammate[2]}"
+    assert process.returncode == 0

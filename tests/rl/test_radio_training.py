@@ -1,7 +1,7 @@
 """TeamRadio through RLlib: the radio smoke curriculum trains in-process (the learner speaks and
 hears, starting from Team weights with the Team move logits exactly), the filters act on the
-move alone, words reach the teammate, and the checkpoint plays in the arena; the curriculum key
-`game` is checked."""
+move alone, words reach the teammate, and the checkpoint plays (and speaks) in the arena; the
+curriculum key `game` is checked."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import pytest
 import torch
 from ray.rllib.core.columns import Columns
 
-from rllib_pommer.arena.match import MatchSpec, play_match
+from rllib_pommer.arena.match import MatchSpec, play_match, record_games
 from rllib_pommer.envs.team import RADIO_ACTION_SPACE
 from rllib_pommer.imitation.features import message_features
 from rllib_pommer.imitation.learned import load_policy_net
@@ -114,6 +114,12 @@ def test_the_radio_checkpoint_restores_and_plays_in_the_arena(radio_smoke):
     records = list(play_match(MatchSpec(team=radio_smoke["checkpoint"], vs="static", games=4,
                                         variant="radio"), workers=1))
     assert len(records) == 4 and {r.variant for r in records} == {"radio"}
+    # outside RLlib too the checkpoint's net speaks: its agents' recorded words are not silence
+    (replay,) = record_games(MatchSpec(team=radio_smoke["checkpoint"], vs="static", games=1,
+                                       variant="radio"), 1)
+    said = {tuple(step["full_actions"][s][1:]) for step in replay["steps"]
+            for s in replay["seats_a"] if isinstance(step["full_actions"][s], list)}
+    assert len(said) > 3
 
 
 @pytest.mark.parametrize(("text", "message"), [

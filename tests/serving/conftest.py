@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from aiohttp import web
 
-from rllib_pommer.game.constants import TEAM_PRESET
+from rllib_pommer.game.constants import TEAM_PRESET, GameConfig
 from rllib_pommer.game.engine import Game
 from rllib_pommer.game.observation import Observation
 from rllib_pommer.game.serialize import dump_observation
@@ -58,9 +58,11 @@ def http_policy(folder: Path, ports: list[int], timeout: float = 0.15) -> Path:
     return path
 
 
-def team_observations(seat: int, steps: int, seed: int = 3) -> list[Observation]:
-    """`seat`'s observations over the first `steps` steps of a game of random actions."""
-    game, rng = Game(TEAM_PRESET), np.random.default_rng(seed)
+def team_observations(seat: int, steps: int, seed: int = 3,
+                      config: GameConfig = TEAM_PRESET) -> list[Observation]:
+    """`seat`'s observations over the first `steps` steps of a game (Team, or `config`) of
+    random moves."""
+    game, rng = Game(config), np.random.default_rng(seed)
     obs = game.reset(seed)
     seen = []
     for _ in range(steps):

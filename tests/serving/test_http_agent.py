@@ -19,9 +19,11 @@ from .conftest import games_played, http_policy, running, team_observations
 OBS = team_observations(1, 1)[0]
 
 
-def fake_remote(*answers, received: list | None = None) -> web.Application:
+def fake_remote(*answers, received: list | None = None,
+                asked: list | None = None) -> web.Application:
     """Answers /action with `answers` in turn, the last one from then on: a (status, text) pair,
-    or a delay in seconds before answering Stop. Bodies of /init_agent go to `received`."""
+    or a delay in seconds before answering Stop. Bodies of /init_agent go to `received`, those
+    of /action to `asked`."""
     queue = list(answers)
 
     async def init_agent(request: web.Request) -> web.Response:
@@ -30,6 +32,8 @@ def fake_remote(*answers, received: list | None = None) -> web.Application:
         return web.json_response({"success": True})
 
     async def action(request: web.Request) -> web.Response:
+        if asked is not None:
+            asked.append(await request.json())
         answer = queue.pop(0) if len(queue) > 1 else queue[0]
         if isinstance(answer, float):
             await asyncio.sleep(answer)

@@ -84,7 +84,7 @@ INIT = {"id": "1", "game_type": "2"}
     ("init_agent", {"id": "one", "game_type": "2"}, "field 'id' does not hold JSON"),
     ("init_agent", {"id": "\"1\"", "game_type": "2"}, "field 'id' must encode an integer"),
     ("init_agent", {"id": "4", "game_type": "2"}, "field 'id' must be in 0..3, got 4"),
-    ("init_agent", {"id": "1", "game_type": "3"}, "field 'game_type' must be in 1..2, got 3"),
+    ("init_agent", {"id": "1", "game_type": "4"}, "field 'game_type' must be in 1..3, got 4"),
     ("init_agent", {**INIT, "seed": "-1"}, "field 'seed' must be non-negative"),
     ("init_agent", {**INIT, "seed": "{\"bit_generator\": \"MT19937\"}"},
      "bit generator 'MT19937' is not one of"),
