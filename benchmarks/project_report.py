@@ -27,7 +27,7 @@ REPO = Path(__file__).resolve().parents[1]
 REPORT = Path("docs/report")
 LADDER = REPORT / "ladder"
 REPLAYS = Path("build/report_replays")
-FIG5_TEAMS = ("ppo", "ppo_cautious", "ppo_team")
+FIG5_TEAMS = ("ppo", "ppo_cautious", "ppo_team", "ppo_dual_clip")
 FIG5_OPPONENTS = ("simple", "simple_nobomb", "static")  # the first game of the first is shown
 FIG5_GAMES = 50
 

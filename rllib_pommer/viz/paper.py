@@ -68,7 +68,7 @@ PAPER_TABLES: dict[str, tuple[str, dict[str, dict[str, Cell]]]] = {
 
 # Our recipes beyond the paper -> the paper's agent each sets out to beat (issue 14, item 6):
 # measured against the same rows, its table sits beside that agent's figures.
-BEYOND_THE_PAPER = {"ppo_team": "ppo"}
+BEYOND_THE_PAPER = {"ppo_team": "ppo", "ppo_dual_clip": "ppo", "ppo_league": "ppo"}
 
 
 def paper_table(team: str) -> tuple[str, dict[str, dict[str, Cell]]] | None:
