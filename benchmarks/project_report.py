@@ -21,13 +21,13 @@ from pathlib import Path
 
 from rllib_pommer.arena.ladder import LADDER_FILE
 from rllib_pommer.evaluate import main as evaluate
-from rllib_pommer.viz.report import write_report
+from rllib_pommer.report import main as report
 
 REPO = Path(__file__).resolve().parents[1]
 REPORT = Path("docs/report")
 LADDER = REPORT / "ladder"
 REPLAYS = Path("build/report_replays")
-FIG5_TEAMS = ("ppo", "ppo_cautious", "ppo_team", "ppo_dual_clip")
+FIG5_TEAMS = ("ppo", "ppo_cautious", "ppo_team", "ppo_dual_clip", "ppo_league")
 FIG5_OPPONENTS = ("simple", "simple_nobomb", "static")  # the first game of the first is shown
 FIG5_GAMES = 50
 
@@ -59,9 +59,10 @@ def main(argv: list[str] | None = None) -> int:
     if not runs or not records:
         raise SystemExit(f"{REPO}: needs campaign/* and {REPORT}/records/*/*.jsonl")
     ladders = [LADDER] if (LADDER / LADDER_FILE).is_file() else []
-    report = write_report([*runs, *records, *ladders, *play_replays(args.workers)], REPORT)
-    print(f"wrote {report} from {len(runs)} run(s) and {len(records)} record file(s)")
-    return 0
+    inputs = [*runs, *records, *ladders, *play_replays(args.workers)]
+    code = report([*map(str, inputs), "--out", str(REPORT)])
+    print(f"from {len(runs)} run(s) and {len(records)} record file(s)")
+    return code
 
 
 if __name__ == "__main__":
