@@ -162,24 +162,33 @@ FIG5_MARKS = ("Every seat is mirrored to start top-left; the blue circle marks t
 
 def plot_behaviour(maps: dict[tuple[str, str], Heatmaps], out: Path) -> Figure:
     """Fig. 5: per (our policy, opponent), where our agents stood and where they laid bombs, as
-    shares of all their steps and bombs, every seat mirrored to start top-left (circled)."""
-    fig = Figure(figsize=(7.4, 3.3 * len(maps) + 0.8), layout="constrained")
-    axes = fig.subplots(len(maps), 2, squeeze=False)
-    for row, ((team, vs), heatmaps) in zip(axes, maps.items(), strict=True):
-        for ax, counts, what in ((row[0], heatmaps.positions, "positions"),
-                                 (row[1], heatmaps.bombs, "bomb placements")):
+    shares of all their steps and bombs, every seat mirrored to start top-left (circled). One row
+    per policy (named at its left), two columns per opponent; a pair not played stays blank."""
+    teams = list(dict.fromkeys(team for team, _ in maps))
+    opponents = list(dict.fromkeys(vs for _, vs in maps))
+    fig = Figure(figsize=(3.1 * 2 * len(opponents), 2.9 * len(teams) + 0.9), layout="constrained")
+    axes = fig.subplots(len(teams), 2 * len(opponents), squeeze=False)
+    for ax in axes.flat:
+        ax.set_axis_off()
+    for (team, vs), heatmaps in maps.items():
+        row, column = teams.index(team), 2 * opponents.index(vs)
+        for ax, counts, what in ((axes[row, column], heatmaps.positions, "positions"),
+                                 (axes[row, column + 1], heatmaps.bombs, "bomb placements")):
+            ax.set_axis_on()
             image = ax.imshow(100 * counts / max(counts.sum(), 1), cmap="magma")
-            ax.plot(1, 1, marker="o", markersize=12, markerfacecolor="none",
+            ax.plot(1, 1, marker="o", markersize=10, markerfacecolor="none",
                     markeredgecolor="#4fc3f7")
-            ax.set_title(f"{team} vs {PAPER_OPPONENTS.get(vs, vs)}: {what}\n"
+            ax.set_title(f"vs {PAPER_OPPONENTS.get(vs, vs)}: {what}\n"
                          f"{heatmaps.games} games, {counts.sum()} in all", fontsize=9)
             ax.set_xticks(np.arange(-0.5, counts.shape[1]), minor=True)
             ax.set_yticks(np.arange(-0.5, counts.shape[0]), minor=True)
             ax.grid(which="minor", color="#444", linewidth=0.5)
             ax.tick_params(which="both", length=0, labelbottom=False, labelleft=False)
-            fig.colorbar(image, ax=ax, shrink=0.85, label=f"% of {what}")
-    teams = ", ".join(dict.fromkeys(team for team, _ in maps))
-    fig.suptitle(f"Fig. 5: positions and bomb placements of {teams}")
+            fig.colorbar(image, ax=ax, shrink=0.8, label=f"% of {what}")
+    for row, team in zip(axes, teams, strict=True):
+        row[0].set_axis_on()
+        row[0].set_ylabel(team, fontsize=12, fontweight="bold")
+    fig.suptitle(f"Fig. 5: positions and bomb placements of {', '.join(teams)}")
     fig.supxlabel(FIG5_MARKS, fontsize=8)
     fig.savefig(out, dpi=DPI)
     return fig

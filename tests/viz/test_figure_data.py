@@ -115,8 +115,13 @@ def test_fig5_names_its_policies_and_explains_its_marks(tmp_path):
     maps["ppo+jitter", "static"].positions[1, 1] = 3
     fig = plot_behaviour(maps, tmp_path / "fig5.png")
     assert fig.get_suptitle() == "Fig. 5: positions and bomb placements of ppo+jitter, imitation"
-    titles = [ax.get_title() for ax in fig.axes if ax.get_title()]
-    assert titles[0].startswith("ppo+jitter vs StaticAgent: positions")
+    panels = [ax for ax in fig.axes if ax.get_title()]  # the colourbars have none
+    grid = fig.axes[:2 * 2 * 2]  # the subplots come first, the colourbars after them
+    assert [ax.get_ylabel() for ax in grid if ax.get_ylabel()] == ["ppo+jitter", "imitation"]
+    # one row per policy, two columns per opponent; pairs not played stay blank
+    assert [ax.get_title().split("\n")[0] for ax in panels] == [
+        "vs StaticAgent: positions", "vs StaticAgent: bomb placements",
+        "vs SimpleAgent: positions", "vs SimpleAgent: bomb placements"]
     assert fig.get_supxlabel() == FIG5_MARKS and "circle" in FIG5_MARKS
 
 
