@@ -8,10 +8,10 @@
 
 A team may be any policy name or path the arena plays (a run's stage checkpoint folder, or
 `RUN@snapshot_k` for a self-play snapshot). Each cell is an arena match written as
-`<team>__vs__<opponent>.jsonl` under --out, kept when a rerun asks for the same games and seed (so
-an interrupted table resumes) and refused when it was played otherwise. Per cell: team A's rates,
-the opponents its team killed per game, the opponents' own-bomb deaths per game, its own, and the
-bombs each of its agents laid per game (`game/kills.py`). The table goes to stdout and
+`<team>__vs__<opponent>.jsonl.gz` under --out, kept when a rerun asks for the same games and seed
+(so an interrupted table resumes) and refused when it was played otherwise. Per cell: team A's
+rates, the opponents its team killed per game, the opponents' own-bomb deaths per game, its own,
+and the bombs each of its agents laid per game (`game/kills.py`). The table goes to stdout and
 `--out/fight.md`. Not part of CI: a long measurement.
 """
 
@@ -23,7 +23,7 @@ import time
 from pathlib import Path
 
 from rllib_pommer.arena.match import MatchSpec, play_match
-from rllib_pommer.arena.records import game_record, summarise, write_records
+from rllib_pommer.arena.records import RECORDS_SUFFIX, game_record, summarise, write_records
 from rllib_pommer.viz.matches import read_rows
 
 
@@ -35,7 +35,7 @@ def _label(team: str) -> str:
 
 
 def _cell(team: str, vs: str, games: int, seed: int, out: Path, workers: int | None) -> dict:
-    path = out / f"{_label(team).replace('/', '_').replace(':', '_')}__vs__{vs}.jsonl"
+    path = out / f"{_label(team).replace('/', '_').replace(':', '_')}__vs__{vs}{RECORDS_SUFFIX}"
     if path.is_file():
         records = [game_record(row) for row in read_rows(path)]
         if len(records) != games or {r.seed for r in records} != {seed}:

@@ -1,14 +1,14 @@
 """Play one of the paper's result tables for a team: every opponent row x filter column.
 
     python benchmarks/paper_table.py --team imitation --games 1000 --out runs/table2
-    python -m rllib_pommer.report runs/table2/*.jsonl --out runs/table2/report
+    python -m rllib_pommer.report runs/table2/*.jsonl.gz --out runs/table2/report
 
-Each cell is an arena match with seats balanced, written as `<team>[+filters]__vs__<opponent>.jsonl`
-plus the `--json` summary beside it (`.json`), the layout `rllib_pommer.report` reads to print the
-table next to the paper's numbers. Finished cells are skipped, so an interrupted run resumes; a
-cell whose records file holds fewer games than its summary (empty, cut short) is played again,
-and a folder holding cells of other `--games` or `--seed` is refused (its numbers are not this
-command's).
+Each cell is an arena match with seats balanced, written as
+`<team>[+filters]__vs__<opponent>.jsonl.gz` plus the `--json` summary beside it (`.json`), the
+layout `rllib_pommer.report` reads to print the table next to the paper's numbers. Finished cells
+are skipped, so an interrupted run resumes; a cell whose records file holds fewer games than its
+summary (empty, cut short) is played again, and a folder holding cells of other `--games` or
+`--seed` is refused (its numbers are not this command's).
 Opponents default to the rows of the paper's table for the team (`imitation`: Table 2, `ppo`:
 Table 3) that name a policy we have (never Skynet), else to the
 scripted rows of Table 2. Not part of CI (about a minute per 1000-game cell).
@@ -22,6 +22,7 @@ import sys
 from pathlib import Path
 
 from rllib_pommer.agents.registry import resolve_policy
+from rllib_pommer.arena.records import RECORDS_SUFFIX
 from rllib_pommer.evaluate import main as evaluate
 from rllib_pommer.util.outputs import check_output_dir
 from rllib_pommer.viz.matches import read_rows
@@ -64,7 +65,7 @@ def _finished(out: Path, stem: str, games: int, seed: int) -> bool:
         raise ValueError(f"{summary}: a cell of --games {kept[0]} --seed {kept[1]}, not --games "
                          f"{games} --seed {seed}; give another --out (or move the old cells "
                          f"aside)")
-    records = out / f"{stem}.jsonl"
+    records = out / f"{stem}{RECORDS_SUFFIX}"
     return records.is_file() and len(read_rows(records)) == games
 
 
@@ -89,7 +90,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     args.out.mkdir(parents=True, exist_ok=True)
     for stem, vs, filters in cells:
-        records, summary = args.out / f"{stem}.jsonl", args.out / f"{stem}.json"
+        records, summary = args.out / f"{stem}{RECORDS_SUFFIX}", args.out / f"{stem}.json"
         if stem in done:
             continue
         argv = ["--team", args.team, "--vs", vs, "--games", str(args.games), "--seed",

@@ -3,7 +3,7 @@
     python benchmarks/project_report.py [--workers 2]
 
 Inputs, all found in the repository: the campaigns' packed runs (`campaign/*`, Fig. 3 and the
-stage table), the arena records of the shipped policies (`docs/report/records/<policy>/*.jsonl`,
+stage table), the arena records of the shipped policies (`docs/report/records/<policy>/*.jsonl.gz`,
 Tables 2 and 3 and Fig. 4), the ladder if one has been built in `docs/report/ladder` (its
 command: docs/commands.md) and, for Fig. 5 and the game a person can watch, replays this script
 plays itself: each of `FIG5_TEAMS` against each of `FIG5_OPPONENTS`, `FIG5_GAMES` games (the
@@ -20,6 +20,7 @@ import sys
 from pathlib import Path
 
 from rllib_pommer.arena.ladder import LADDER_FILE
+from rllib_pommer.arena.records import RECORDS_SUFFIX
 from rllib_pommer.evaluate import main as evaluate
 from rllib_pommer.report import main as report
 
@@ -55,9 +56,9 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     os.chdir(REPO)  # the report names its inputs relative to the repository
     runs = sorted(path for path in Path("campaign").iterdir() if path.is_dir())
-    records = sorted((REPORT / "records").glob("*/*.jsonl"))
+    records = sorted((REPORT / "records").glob(f"*/*{RECORDS_SUFFIX}"))
     if not runs or not records:
-        raise SystemExit(f"{REPO}: needs campaign/* and {REPORT}/records/*/*.jsonl")
+        raise SystemExit(f"{REPO}: needs campaign/* and {REPORT}/records/*/*{RECORDS_SUFFIX}")
     ladders = [LADDER] if (LADDER / LADDER_FILE).is_file() else []
     inputs = [*runs, *records, *ladders, *play_replays(args.workers)]
     code = report([*map(str, inputs), "--out", str(REPORT)])

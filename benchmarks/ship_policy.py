@@ -24,6 +24,7 @@ from pathlib import Path
 
 from paper_table import main as play_table
 
+from rllib_pommer.arena.records import RECORDS_SUFFIX
 from rllib_pommer.report import main as report
 from rllib_pommer.train import main as train
 
@@ -70,7 +71,8 @@ def main(argv: list[str] | None = None) -> int:
                        "--workers", str(args.workers)])
     if code != 0:
         return code
-    return report(["--card", str(policy), *map(str, sorted(records.glob("*.jsonl")))])
+    return report(["--card", str(policy),
+                   *map(str, sorted(records.glob(f"*{RECORDS_SUFFIX}")))])
 
 
 if __name__ == "__main__":

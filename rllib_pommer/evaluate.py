@@ -5,7 +5,7 @@ learned radio networks send words) of policy A against policy B on all cores, ha
 seats {0, 2} and half on {1, 3} (`--fixed-seats`: always {0, 2}), and prints A's win/loss/tie rates
 with 95% Wilson intervals, the mean game length, A's agents lost to their own bombs, and per game
 who killed whom (each team's kills, suicides and team kills: `game/kills.py`). `--records FILE`
-writes one row per game (.jsonl or .csv) with the columns
+writes one row per game (.jsonl, gzipped .jsonl.gz, or .csv) with the columns
 
     game, seed, seats_a, result (win/loss/tie for A), length, died, own_bomb_deaths, bombs_laid,
     team, vs, filters, killers, variant
@@ -85,7 +85,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--variant", choices=("team", "radio"), default="team",
                         help="the game: Team, or TeamRadio with words (default: %(default)s)")
     parser.add_argument("--workers", type=int, default=None, help="processes (default: cores)")
-    parser.add_argument("--records", type=Path, help="per-game rows, .jsonl or .csv")
+    parser.add_argument("--records", type=Path, help="per-game rows, .jsonl, .jsonl.gz or .csv")
     parser.add_argument("--record", type=int, default=0, metavar="K",
                         help="write the first K games as replays")
     parser.add_argument("--replays", type=Path, default=Path("arena_replays.jsonl.gz"),

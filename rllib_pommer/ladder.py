@@ -4,7 +4,7 @@ Plays every pair of the policies (default: every policy in policies/ that plays 
 learned one also with both filters, `_jitter_action`) for N games, seats balanced, and rates
 them: DIR/ladder.md (the table: rating, 95% interval, games, wins / losses / ties), DIR/ladder.json
 (the same and each pair's results) and DIR/ladder.png (ratings with their intervals). Each
-pair's games are kept as arena records, DIR/records/<a>__vs__<b>.jsonl, as soon as its match
+pair's games are kept as arena records, DIR/records/<a>__vs__<b>.jsonl.gz, as soon as its match
 ends; running the command again resumes: pairs played with the same N and seed are kept, a new
 policy plays only its new pairs, and a pair played with another N or seed is refused. The model,
 the scale and the intervals: rllib_pommer/arena/ladder.py.

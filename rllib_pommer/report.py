@@ -5,11 +5,10 @@ Each input is classified by its content:
 
 - a directory: the Tune trial directories in or below it (progress.csv or result.json) give
   Fig. 3, the training reward per curriculum phase (columns: rllib_pommer/rl/history.py);
-- a .jsonl or .csv file of arena rows (`evaluate --records`, whose rows name their match; older
-  files: a sidecar .json or the file name, see rllib_pommer/viz/matches.py) gives the
-  win/loss/tie tables, with 95% intervals, in
-  the layout of the paper's Tables 2 and 3 beside the paper's numbers, and Fig. 4, the effect of
-  the filters;
+- a .jsonl, .jsonl.gz or .csv file of arena rows (`evaluate --records`, whose rows name their
+  match; older files: a sidecar .json or the file name, see rllib_pommer/viz/matches.py) gives
+  the win/loss/tie tables, with 95% intervals, in the layout of the paper's Tables 2 and 3
+  beside the paper's numbers, and Fig. 4, the effect of the filters;
 - a .jsonl[.gz] file of game replays (`evaluate --record K`) gives Fig. 5, the position and bomb
   heatmaps per opponent, and a picture and a viewer of its first game;
 - a ladder's folder (`python -m rllib_pommer.ladder --out DIR`, holding ladder.json) gives the

@@ -224,7 +224,7 @@ CASES = [
      "shipped/pi.pt exists (a policy not trained here); pass --force to replace it"),
     ("report on a damaged records line", report,
      lambda t, r, s: ["--out", str(t / "r"), str(_records(t, [ROW, ROW[:30]]))],
-     "static__vs__simple.jsonl:2: not a JSON row"),
+     "static__vs__simple.jsonl:2: not JSON"),
     ("serve --port 70000", serve, lambda t, r, s: ["--policy", "static", "--port", "70000"],
      "--port must be in 0..65535, got 70000"),
     ("ladder unknown policy", ladder,

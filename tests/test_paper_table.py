@@ -4,6 +4,7 @@ and 12). Cells of 2 games against `static`, one worker."""
 
 from __future__ import annotations
 
+import gzip
 import importlib.util
 from pathlib import Path
 
@@ -30,7 +31,8 @@ def test_cells_of_other_games_or_seed_are_refused_and_empty_ones_played_again(pa
     out = tmp_path / "table"
     assert paper_table(_args(out)) == 0
     cell = out / "static__vs__static"
-    assert len(cell.with_suffix(".jsonl").read_text().splitlines()) == 2
+    records = out / "static__vs__static.jsonl.gz"
+    assert len(gzip.decompress(records.read_bytes()).splitlines()) == 2
     played = {p.name: p.read_bytes() for p in out.iterdir()}
     capsys.readouterr()
 
@@ -42,10 +44,10 @@ def test_cells_of_other_games_or_seed_are_refused_and_empty_ones_played_again(pa
             f"{seed}; give another --out (or move the old cells aside)")
     assert {p.name: p.read_bytes() for p in out.iterdir()} == played
 
-    cell.with_suffix(".jsonl").write_text("")  # skipped before, then refused by report
+    records.write_bytes(gzip.compress(b""))  # skipped before, then refused by report
     assert paper_table(_args(out)) == 0
     assert "== static__vs__static\n" in capsys.readouterr().out
-    assert cell.with_suffix(".jsonl").read_bytes() == played["static__vs__static.jsonl"]
+    assert records.read_bytes() == played["static__vs__static.jsonl.gz"]
     assert paper_table(_args(out)) == 0  # finished: nothing played
     assert "==" not in capsys.readouterr().out
 

@@ -6,7 +6,7 @@ order as team A and team B (so a ladder does not depend on the order its policie
 the registry's filter suffixes (`ppo_team_jitter_action`): a filtered policy is a policy of its
 own on the ladder.
 
-Records. Each pair's games are an arena records file, `<folder>/records/<a>__vs__<b>.jsonl` (the
+Records. Each pair's games are an arena records file, `<folder>/records/<a>__vs__<b>.jsonl.gz` (the
 rows `evaluate --records` writes, which name their match), written whole when the pair's match
 ends (a temporary file renamed), so an interrupted ladder keeps every pair it finished. A pair
 whose file holds games 0..games-1 of the ladder's seed is played and never played again; a file
@@ -50,7 +50,7 @@ import numpy as np
 from ..agents.registry import KINDS, policy_names, resolve_policy
 from ..game.records import read_jsonl
 from .match import MatchSpec
-from .records import GameRecord, game_record, write_records
+from .records import RECORDS_SUFFIX, GameRecord, game_record, write_records
 
 RECORDS_DIR = "records"
 LADDER_FILE = "ladder.json"
@@ -107,7 +107,7 @@ def default_policies() -> list[str]:
 
 
 def pair_path(folder: Path, pair: Pair) -> Path:
-    return folder / RECORDS_DIR / f"{pair[0]}__vs__{pair[1]}.jsonl"
+    return folder / RECORDS_DIR / f"{pair[0]}__vs__{pair[1]}{RECORDS_SUFFIX}"
 
 
 def _read_pair(ladder: Ladder, path: Path, pair: Pair) -> list[GameRecord]:
@@ -140,10 +140,11 @@ def played_pairs(ladder: Ladder, folder: Path) -> dict[Pair, list[GameRecord]]:
 
 
 def save_pair(folder: Path, pair: Pair, records: Sequence[GameRecord]) -> Path:
-    """Write the pair's records whole: a temporary file, renamed once written."""
+    """Write the pair's records whole: a temporary file (same kind, hidden name), renamed once
+    written."""
     path = pair_path(folder, pair)
     path.parent.mkdir(parents=True, exist_ok=True)
-    temporary = path.with_name(path.name + ".tmp")
+    temporary = path.with_name(".writing-" + path.name)
     write_records(temporary, records)
     os.replace(temporary, path)
     return path

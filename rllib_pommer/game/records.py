@@ -10,6 +10,7 @@ observations `message`.
 from __future__ import annotations
 
 import gzip
+import io
 import json
 from collections.abc import Iterable, Iterator
 from pathlib import Path
@@ -21,9 +22,35 @@ from .engine import Games, info_dict, radio_actions
 from .serialize import dump_observation
 
 
+class _StamplessGzip(gzip.GzipFile):
+    """A gzip file written with neither a name nor a time in its header, so the same lines give
+    the same bytes whatever the file is called (a temporary name, renamed) and whenever; it
+    closes the file it writes into."""
+
+    def __init__(self, path: Path):
+        super().__init__(filename="", mode="wb", fileobj=open(path, "wb"), mtime=0)
+        self._owned = self.fileobj
+
+    def close(self) -> None:
+        try:
+            super().close()
+        finally:
+            self._owned.close()
+
+
 def open_text(path: Path, mode: str):
     """A .jsonl file, or a .jsonl.gz one through gzip, opened as text for `mode` ("r", "w")."""
-    return gzip.open(path, mode + "t") if path.suffix == ".gz" else open(path, mode)
+    if path.suffix != ".gz":
+        return open(path, mode)
+    if mode == "r":
+        return gzip.open(path, "rt")
+    return io.TextIOWrapper(_StamplessGzip(path), encoding="utf-8")
+
+
+def name_stem(path: Path) -> str:
+    """A data file's name without its kind: `a__vs__b` for a.jsonl, a.jsonl.gz or a.csv."""
+    name = path.name.removesuffix(".gz")
+    return name[: -len(Path(name).suffix)] if Path(name).suffix else name
 
 
 # What every step of a record holds (the observations are optional: `has_observations`).
@@ -50,7 +77,9 @@ def check_record(record, where: str) -> dict:
     return record
 
 
-def _numbered(path: str | Path) -> Iterator[tuple[int, object]]:
+def numbered_values(path: str | Path) -> Iterator[tuple[int, object]]:
+    """(line number, JSON value) of each non-blank line of a .jsonl or .jsonl.gz file; errors
+    as `read_jsonl`'s."""
     path = Path(path)
     if not path.exists():
         raise ValueError(f"{path}: no such file")
@@ -71,13 +100,13 @@ def _numbered(path: str | Path) -> Iterator[tuple[int, object]]:
 def read_jsonl(path: str | Path) -> Iterator:
     """Yield the JSON values of a .jsonl or .jsonl.gz file, one a line; ValueError naming the
     file (and line) for a missing file, one cut short or damaged, or a line that is not JSON."""
-    return (value for _, value in _numbered(path))
+    return (value for _, value in numbered_values(path))
 
 
 def read_games(path: str | Path) -> Iterator[dict]:
     """Yield the game records of a .jsonl or .jsonl.gz file, one at a time, each checked by
     `check_record` (errors name the file and line)."""
-    for line_no, record in _numbered(path):
+    for line_no, record in numbered_values(path):
         yield check_record(record, f"{path}:{line_no}")
 
 

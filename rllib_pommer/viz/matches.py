@@ -7,7 +7,7 @@ A file's match comes from, first found:
    it may rename a team, as `benchmarks/paper_table.py` does);
 2. the rows themselves: their `team`, `vs` and `filters` columns, which `evaluate --records`
    writes (all rows of a file must agree);
-3. the file name `<team>[+<filter>...]__vs__<opponent>.jsonl` (or `.csv`), e.g.
+3. the file name `<team>[+<filter>...]__vs__<opponent>.jsonl` (or `.jsonl.gz`, `.csv`), e.g.
    `ppo+jitter+action__vs__simple_nobomb.jsonl`, for records written before the rows named it.
 
 A team name may also carry the registry's filter suffixes (`ppo_jitter_action`); they count as
@@ -26,6 +26,7 @@ from pathlib import Path
 from ..agents.registry import FILTER_SUFFIXES, FILTERS
 from ..arena.rates import wilson
 from ..arena.records import KILL_COUNTS, game_record
+from ..game.records import name_stem, numbered_values
 
 VARIANTS = ("vanilla", "jitter", "action", "jitter_action")
 NAME_SEPARATOR = "__vs__"
@@ -85,25 +86,18 @@ class Outcomes:
 
 
 def read_rows(path: Path) -> list[dict]:
-    """Rows of a .jsonl or .csv records file (list columns of a .csv are JSON text); a line that
-    is not a JSON object is a ValueError naming the file and line."""
-    with open(path, newline="") as f:
-        if path.suffix == ".csv":
+    """Rows of a .jsonl, .jsonl.gz or .csv records file (list columns of a .csv are JSON text);
+    a line that is not a JSON object is a ValueError naming the file and line."""
+    if path.suffix == ".csv":
+        with open(path, newline="") as f:
             return list(csv.DictReader(f))
-        rows = []
-        for line_no, line in enumerate(f, 1):
-            if not line.strip():
-                continue
-            try:
-                row = json.loads(line)
-            except json.JSONDecodeError as exc:
-                raise ValueError(f"{path}:{line_no}: not a JSON row ({exc.msg}, column "
-                                 f"{exc.colno}); damaged or cut short?") from None
-            if not isinstance(row, dict):
-                raise ValueError(f"{path}:{line_no}: a records row is a JSON object, got "
-                                 f"{type(row).__name__}")
-            rows.append(row)
-        return rows
+    rows = []
+    for line_no, row in numbered_values(path):
+        if not isinstance(row, dict):
+            raise ValueError(f"{path}:{line_no}: a records row is a JSON object, got "
+                             f"{type(row).__name__}")
+        rows.append(row)
+    return rows
 
 
 def variant_of(team: str, filters: Iterable[str]) -> tuple[str, str]:
@@ -137,7 +131,7 @@ def _listed(value) -> list:
 
 def match_of(path: Path, rows: list[dict] | None = None) -> Match:
     """The match of a records file (module docstring); `rows`: its rows, if already read."""
-    sidecar = path.with_suffix(".json")
+    sidecar = path.with_name(name_stem(path) + ".json")
     if sidecar.is_file():
         lines = sidecar.read_text().strip().splitlines()
         try:
@@ -150,14 +144,15 @@ def match_of(path: Path, rows: list[dict] | None = None) -> Match:
         team, vs, filters = summary["team"], summary["vs"], summary.get("filters", [])
     elif named := _named_by_rows(path, read_rows(path) if rows is None else rows):
         team, vs, filters = named
-    elif NAME_SEPARATOR in path.stem:
-        left, vs = path.stem.split(NAME_SEPARATOR, 1)
+    elif NAME_SEPARATOR in name_stem(path):
+        left, vs = name_stem(path).split(NAME_SEPARATOR, 1)
         team, *filters = left.split("+")
     else:
         raise ValueError(f"{path}: cannot tell which match it holds (its rows have no team "
                          f"and vs: written by an older evaluate?); add a sidecar "
                          f"{sidecar.name} (evaluate --json) or name it "
-                         f"<team>[+<filter>...]{NAME_SEPARATOR}<opponent>{path.suffix}")
+                         f"<team>[+<filter>...]{NAME_SEPARATOR}<opponent>"
+                         f"{path.name.removeprefix(name_stem(path))}")
     base, variant = variant_of(team, filters)
     return Match(base, variant, vs)
 

@@ -112,7 +112,7 @@ def write_model_card(policy_dir: Path, source: dict, training: Training,
     parts += list(fig3_section(training, policy_dir))
     play = (f"`python benchmarks/paper_table.py --team {source['policy']} --games 1000 --out "
             f"RECORDS` (the paper's rows that name a policy we have; seed 0, seats balanced), "
-            f"then `python -m rllib_pommer.report --card {policy_dir} RECORDS/*.jsonl`")
+            f"then `python -m rllib_pommer.report --card {policy_dir} RECORDS/*.jsonl.gz`")
     if records:
         parts += list(tables_section(list(records), policy_dir))
         parts.append(f"From {len(records)} arena record files; played by {play}.")

@@ -4,6 +4,7 @@ resumes, adds only a new policy's pairs, and refuses records made with other gam
 
 from __future__ import annotations
 
+import gzip
 import json
 import math
 
@@ -105,12 +106,13 @@ def test_a_ladder_plays_resumes_and_adds_only_new_pairs(tmp_path, capsys):
     printed = capsys.readouterr().out
     assert "3 pairs of 3 policies: 0 played before, 3 to play (12 games)" in printed
     files = _files(out)
-    assert sorted(files) == ["simple__vs__simple_nobomb.jsonl", "simple__vs__static.jsonl",
-                             "simple_nobomb__vs__static.jsonl"]
-    # A pair's file is the arena's records of that match, so evaluate and report read it too.
+    assert sorted(files) == ["simple__vs__simple_nobomb.jsonl.gz",
+                             "simple__vs__static.jsonl.gz", "simple_nobomb__vs__static.jsonl.gz"]
+    # A pair's file is the arena's records of that match, so evaluate and report read it too;
+    # gzipped without a timestamp, the same games are the same bytes.
     ladder = Ladder(("static", "simple_nobomb", "simple"), 4)
-    write_records(tmp_path / "again.jsonl", play_match(ladder.match(("simple", "static")), 1))
-    assert (tmp_path / "again.jsonl").read_bytes() == files["simple__vs__static.jsonl"]
+    write_records(tmp_path / "again.jsonl.gz", play_match(ladder.match(("simple", "static")), 1))
+    assert (tmp_path / "again.jsonl.gz").read_bytes() == files["simple__vs__static.jsonl.gz"]
     data = json.loads((out / LADDER_FILE).read_text())
     assert (data["games_per_pair"], data["seed"], data["bootstrap"]) == (4, 0, 50)
     assert sorted(s["policy"] for s in data["standings"]) == ["simple", "simple_nobomb", "static"]
@@ -164,15 +166,20 @@ def test_records_of_another_match_in_a_pairs_file_are_refused(tmp_path, capsys):
 
 @pytest.mark.parametrize("damage, told", [
     (lambda text: text.replace('"tie"', '"draw"', 1), "game 0: result 'draw' is not one of"),
-    (lambda text: text[:-30], "simple_nobomb__vs__static.jsonl:4"),  # cut short
+    (lambda text: text[:-30], "simple_nobomb__vs__static.jsonl.gz:4"),  # a line cut short
     (lambda text: text.replace('"seed": 0, ', "", 1), "not an arena records file"),
+    (None, "simple_nobomb__vs__static.jsonl.gz: damaged or cut short"),  # the gzip cut short
 ])
 def test_a_damaged_pair_file_is_named(tmp_path, capsys, damage, told):
     out = tmp_path / "ladder"
     path = pair_path(out, ("simple_nobomb", "static"))
     path.parent.mkdir(parents=True)
     write_records(path, games("simple_nobomb", "static", ["tie"] * 4))
-    path.write_text(damage(path.read_text()))
+    if damage is None:
+        path.write_bytes(path.read_bytes()[:-20])
+    else:
+        path.write_bytes(gzip.compress(damage(gzip.decompress(path.read_bytes()).decode())
+                                       .encode()))
     assert main(["--policies", "static,simple_nobomb", "--games", "4", "--out", str(out)]) == 2
     err = capsys.readouterr().err
     assert err.count("error:") == 1 and told in err and "Traceback" not in err
@@ -195,7 +202,7 @@ def test_an_interrupted_ladder_keeps_its_finished_pairs_and_resumes(tmp_path, ca
             "--out", str(tmp_path)]
     assert main(argv) == 130
     assert "interrupted: the pairs finished are kept" in capsys.readouterr().err
-    assert [p.name for p in (tmp_path / "records").iterdir()] == ["random__vs__simple.jsonl"]
+    assert [p.name for p in (tmp_path / "records").iterdir()] == ["random__vs__simple.jsonl.gz"]
     assert not (tmp_path / LADDER_FILE).exists()
     interrupt_at[0] = -1
     assert main(argv) == 0

@@ -3,6 +3,7 @@ Figs. 3 and 5 draw it."""
 
 from __future__ import annotations
 
+import gzip
 import json
 import re
 
@@ -25,6 +26,9 @@ def test_matches_are_named_by_sidecar_or_file_name(tmp_path):
     sidecar = tmp_path / "run7.jsonl"
     for path in (named, sidecar):
         path.write_text("".join(json.dumps(r) + "\n" for r in rows))
+    packed = tmp_path / "ppo__vs__static.jsonl.gz"  # gzipped, named the same way
+    packed.write_bytes(gzip.compress(named.read_bytes()))
+    assert match_of(packed) == Match("ppo", "vanilla", "static")
     (tmp_path / "run7.json").write_text("progress lines\n" + json.dumps(
         {"team": "ppo_action", "vs": "static", "filters": ["jitter"], "win": 0.5}))
     assert match_of(named) == Match("ppo", "jitter", "simple_action")
