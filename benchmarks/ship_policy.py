@@ -17,6 +17,7 @@ one core at 1000 games a cell.
 from __future__ import annotations
 
 import argparse
+import os
 import shutil
 import sys
 import time
@@ -36,7 +37,7 @@ def _move_aside(path: Path, stamp: str) -> Path | None:
     """`path` moved under build/replaced/ (None if it was not there)."""
     if not path.exists():
         return None
-    aside = REPO / "build" / "replaced" / stamp / path.relative_to(REPO)
+    aside = REPO / "build" / "replaced" / stamp / path
     aside.parent.mkdir(parents=True, exist_ok=True)
     shutil.move(path, aside)
     return aside
@@ -52,15 +53,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--keep-records", action="store_true",
                         help="resume a table begun for this same export instead of replacing it")
     args = parser.parse_args(argv)
-    policy = REPO / "policies" / args.policy
-    records = REPO / "docs" / "report" / "records" / args.policy
+    run = args.run.resolve()
+    os.chdir(REPO)  # the card names its policy and records relative to the repository
+    policy = Path("policies") / args.policy
+    records = Path("docs") / "report" / "records" / args.policy
     stamp = time.strftime("%Y%m%d-%H%M%S")
 
     old_policy = _move_aside(policy, stamp)
     _move_aside(policy.with_suffix(".toml"), stamp)
     if not args.keep_records:
         _move_aside(records, stamp)
-    code = train(["--out", str(args.run.resolve()), "--export", str(policy)])
+    code = train(["--out", str(run), "--export", str(policy)])
     if code != 0:
         return code
     if old_policy is not None and (old_policy / NOTES).is_file():
