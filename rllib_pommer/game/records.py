@@ -28,7 +28,9 @@ class _StamplessGzip(gzip.GzipFile):
     closes the file it writes into."""
 
     def __init__(self, path: Path):
-        super().__init__(filename="", mode="wb", fileobj=open(path, "wb"), mtime=0)
+        # The raw file lives as long as this object and is closed by close(), not by a with-block.
+        raw = open(path, "wb")  # noqa: SIM115
+        super().__init__(filename="", mode="wb", fileobj=raw, mtime=0)
         self._owned = self.fileobj
 
     def close(self) -> None:
