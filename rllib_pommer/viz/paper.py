@@ -1,4 +1,5 @@
-"""The paper's Tables 2 and 3 (Meisheri et al. 2019), from its LaTeX tables (tests/reference/).
+"""The paper's Tables 2 and 3 (Meisheri et al. 2019), from its LaTeX tables (tests/reference/),
+and what its text says its Fig. 3 shows.
 
 Each cell is (win, loss, tie) of the row's team in 1000 games, by opponent and by variant; None
 where the paper has "-". One typo is corrected: Table 3, SimpleAgent_NoBomb_action, PPO_action
@@ -65,6 +66,22 @@ PAPER_TABLES: dict[str, tuple[str, dict[str, dict[str, Cell]]]] = {
     }),
 }
 
+
+# What the paper reads in its Fig. 3 (four runs of 100,000 games: the curriculum with shaping,
+# the cautious agent, the curriculum without shaping, shaping without a curriculum), in our words,
+# each with the phase rows of our runs that test it (their curricula: curriculum/*.toml).
+FIG3_CLAIMS = (
+    ("After training, the reward is above the imitation policy's, which the value warm-up "
+     "measures (the policy is frozen there).", "`paper`: `value_warmup` against `simple`"),
+    ("The cautious agent's reward first falls, then settles: its teammate is active, so credit "
+     "is harder to assign.", "`cautious`: `value_warmup` and `simple`"),
+    ("Without a curriculum (shaping, SimpleAgent from the start, teammate removed) learning is "
+     "slow; both curriculum runs progress much faster.",
+     "`simple`: `no_curriculum` against `paper` and `cautious`"),
+    ("Without shaping (a tie pays -1 like a loss) learning is hard: the run deteriorates "
+     "against SimpleAgent_NoBomb.", "`simple_nobomb` (and `static`): `no_shaping` against "
+     "`paper`"),
+)
 
 # Our recipes beyond the paper -> the paper's agent each sets out to beat (issue 14, item 6):
 # measured against the same rows, its table sits beside that agent's figures.

@@ -24,9 +24,9 @@ from .figures import (
 from .frames import load_game
 from .ladder import ladder_section
 from .matches import ROW_KEYS, load_outcomes, rates_by_opponent
-from .paper import paper_table
+from .paper import FIG3_CLAIMS, paper_table
 from .render import render_game
-from .tables import milestones_table, results_table, training_table
+from .tables import milestones_table, phase_progress_table, results_table, training_table
 from .training import RLLIB_WINDOW, WINDOW, Training
 from .viewer import write_viewer
 
@@ -100,6 +100,13 @@ def fig3_section(training: Training, out: Path, summaries: str = "") -> Iterator
                "above (and enemies its team killed per game, where logged), with the phase in "
                "force; runs meet different opponents at the same count, so read the phase too.")
         yield milestones_table(training.curves)
+        yield ("How fast each run learned within a phase: the same means counted from the "
+               "phase's first game (the window restarts with it), rows of one phase together, "
+               "so runs that meet an opponent at different points of their lives compare from "
+               "their first game against it.")
+        yield phase_progress_table(training.curves)
+        yield ("What the paper reads in its Fig. 3, and the rows above that test it here:\n\n"
+               + "\n".join(f"- {claim} Rows: {rows}." for claim, rows in FIG3_CLAIMS))
     yield training_table(training.stages)
     if summaries:
         yield (f"Each run's curve and training figures per iteration are in `{summaries}/<run>/"

@@ -3,7 +3,8 @@ four variants, each cell win / loss / tie; ours over n games with their 95% Wils
 where the records carry kill credit, per game the opponents we killed, the opponents' suicides,
 ours, and our bombs per agent; the paper's (1000 games) below. And
 the training tables: what each curriculum phase of each run cost and how the learner did, and
-where each run stood after the same numbers of games (the reading of Fig. 3 across runs)."""
+where each run stood after the same numbers of games, and how fast each learned within a phase
+(the reading of Fig. 3 across runs)."""
 
 from __future__ import annotations
 
@@ -11,9 +12,10 @@ import math
 
 from .matches import VARIANTS, Match, Outcomes
 from .paper import PAPER_OPPONENTS, paper_table
-from .training import StageFigures, TrainingCurve
+from .training import StageFigures, TrainingCurve, phases
 
 MILESTONES = (5_000, 10_000, 20_000, 30_000, 40_000, 60_000, 100_000)  # games, for milestones_table
+PHASE_MARKS = (1_000, 2_500, 5_000, 10_000, 20_000, 40_000)  # games into a phase
 
 
 def _rates(cell) -> str:
@@ -71,6 +73,12 @@ def training_table(figures: list[StageFigures]) -> str:
     return "\n".join(lines)
 
 
+def _outcome(curve: TrainingCurve, i: int) -> str:
+    """Row `i` of `curve`: win / loss, and kills per game where logged."""
+    kills = "" if math.isnan(curve.kills[i]) else f", kills {curve.kills[i]:.2f}"
+    return f"{_figure(curve.wins[i], 2)} / {_figure(curve.losses[i], 2)}{kills}"
+
+
 def milestones_table(curves: list[TrainingCurve], milestones=MILESTONES) -> str:
     """One row per run, one column per number of games any run reached: the curves' rolling
     win / loss rates (and kills per game where logged) at the run's last row within that many
@@ -87,8 +95,36 @@ def milestones_table(curves: list[TrainingCurve], milestones=MILESTONES) -> str:
                 cells.append("—")
                 continue
             i = rows[-1]
-            kills = "" if math.isnan(curve.kills[i]) else f", kills {curve.kills[i]:.2f}"
-            cells.append(f"{_figure(curve.wins[i], 2)} / {_figure(curve.losses[i], 2)}{kills} "
-                         f"({curve.stages[i] or '—'})")
+            cells.append(f"{_outcome(curve, i)} ({curve.stages[i] or '—'})")
         lines.append(f"| {curve.name} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def phase_progress_table(curves: list[TrainingCurve], marks=PHASE_MARKS) -> str:
+    """How fast each run learned within each phase: one row per run and named phase, rows of
+    the same phase together, one column per number of games into the phase that some phase
+    reached, and the phase's end. A cell is the rolling win / loss (and kills) at the phase's
+    last row within that many of its games (the window restarts with the phase); "—" where the
+    phase did not get there. Runs that meet the same opponent at different points of their
+    lives are compared from their first game against it."""
+    spans = []  # (stage, run, curve, first row, end row, episodes before the phase)
+    for curve in curves:
+        for start, end, stage in phases(curve.stages):
+            if stage:
+                before = curve.episodes[start - 1] if start else 0.0
+                spans.append((stage, curve.name, curve, start, end, before))
+    spans.sort(key=lambda span: (span[0], span[1]))
+    reached = [m for m in marks
+               if any(c.episodes[end - 1] - before >= m for _, _, c, _, end, before in spans)]
+    lines = ["| phase | run | " + " | ".join(f"{m:,} games in" for m in reached)
+             + " | at its end |", "|---" * (len(reached) + 3) + "|"]
+    for stage, name, curve, start, end, before in spans:
+        games = curve.episodes[start:end] - before
+        cells = []
+        for m in reached:
+            rows = (games <= m).nonzero()[0]
+            cells.append(_outcome(curve, start + rows[-1]) if games[-1] >= m and len(rows)
+                         else "—")
+        cells.append(f"{_outcome(curve, end - 1)} ({games[-1]:,.0f} games)")
+        lines.append(f"| {stage} | {name} | " + " | ".join(cells) + " |")
     return "\n".join(lines)

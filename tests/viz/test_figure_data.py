@@ -14,7 +14,7 @@ from rllib_pommer.viz.behaviour import Heatmaps, heatmaps_by_opponent, to_top_le
 from rllib_pommer.viz.figures import FIG5_MARKS, plot_behaviour, plot_outcomes, plot_training
 from rllib_pommer.viz.matches import Match, load_outcomes, match_of
 from rllib_pommer.viz.paper import PAPER_OPPONENTS, PAPER_TABLES, paper_table
-from rllib_pommer.viz.tables import milestones_table
+from rllib_pommer.viz.tables import milestones_table, phase_progress_table
 from rllib_pommer.viz.training import TrainingCurve
 
 from ..conftest import PAPER_TABLES as PAPER_TEX
@@ -155,3 +155,28 @@ def test_milestones_compare_runs_at_equal_games_and_skip_what_none_reached():
     assert first == ("| paper | 0.10 / 0.50 (warmup) | 0.20 / 0.40 (static) | "
                      "0.30 / 0.30 (static) |")
     assert second == "| league | 0.25 / 0.00, kills 0.50 (w) | — | — |"
+
+
+def test_phase_progress_counts_games_from_each_phase_start_and_groups_phases():
+    # `paper` meets SimpleAgent after 40,000 games, `no_curriculum` after 10,000: compared from
+    # their first game against it, not at equal lifetimes.
+    paper = TrainingCurve("paper", np.array([10_000.0, 40_000, 41_000, 42_500, 45_000]),
+                          np.zeros(5), ["warmup", "nobomb", "simple", "simple", "simple"],
+                          ["shaped"] * 5, np.array([0.2, 0.5, 0.55, 0.6, 0.7]),
+                          np.array([0.7, 0.2, 0.3, 0.25, 0.2]))
+    flat = TrainingCurve("no_curriculum", np.array([10_000.0, 11_000, 12_000]), np.zeros(3),
+                         ["warmup", "simple", "simple"], ["shaped"] * 3,
+                         np.array([0.2, 0.25, 0.3]), np.array([0.7, 0.65, 0.6]),
+                         np.array([np.nan, 0.2, 0.3]))
+    header, rule, *rows = phase_progress_table([paper, flat], (1_000, 2_500, 5_000)).splitlines()
+    assert header == ("| phase | run | 1,000 games in | 2,500 games in | 5,000 games in "
+                      "| at its end |")
+    assert rows == [  # a phase with no row yet within m of its games has no figure there
+        "| nobomb | paper | — | — | — | 0.50 / 0.20 (30,000 games) |",
+        "| simple | no_curriculum | 0.25 / 0.65, kills 0.20 | — | — | "
+        "0.30 / 0.60, kills 0.30 (2,000 games) |",
+        "| simple | paper | 0.55 / 0.30 | 0.60 / 0.25 | 0.70 / 0.20 | 0.70 / 0.20 "
+        "(5,000 games) |",
+        "| warmup | no_curriculum | — | — | — | 0.20 / 0.70 (10,000 games) |",
+        "| warmup | paper | — | — | — | 0.20 / 0.70 (10,000 games) |",
+    ]
