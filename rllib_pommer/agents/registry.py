@@ -109,10 +109,11 @@ KINDS: dict[str, Kind] = {
     **{kind: Kind(_scripted(rule.agent), fixed="scripted") for kind, rule in RULES.items()},
     "http": Kind(HttpAgent.from_spec, keys=None),  # http_agent.py checks its own keys
     "learned": Kind(None, "rllib_pommer.imitation.learned",
-                    {"weights": (str, True), "greedy": (bool, False)}, "net"),
+                    {"weights": (str, True), "greedy": (bool, False),
+                     "temperature": (float, False)}, "net"),
     "rllib_checkpoint": Kind(None, "rllib_pommer.rl.checkpoint_policy",
                              {"checkpoint": (str, True), "greedy": (bool, False),
-                              "module": (str, False)}, "net"),
+                              "temperature": (float, False), "module": (str, False)}, "net"),
 }
 
 

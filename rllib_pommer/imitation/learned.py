@@ -2,14 +2,17 @@
 
 A policy file of kind "learned" names its weights (`weights = "imitation/pi.pt"`, relative to the
 file) and how to act (`greedy = false` samples from the softmax with the agent's own random
-stream, as PPO's stochastic policy does; `true` takes the most likely action). Weights load with
+stream, as PPO's stochastic policy does; `true` takes the most likely action; `temperature`,
+1.0 unless said, divides the logits before a sampled choice: below 1 sharpens the distribution
+toward the greedy action, above 1 flattens it). Weights load with
 `torch.load(weights_only=True)`: plain tensors only, no arbitrary pickle.
 
 Both kinds of learned policy are played here: "learned" (a state_dict file) and, registered by
 `rl/checkpoint_policy.py`, "rllib_checkpoint" (a PPO run's learner). Each kind registers the key
 naming its path and the loader of its network (`register_learned_kind`); the path is resolved
-against the policy file (`PolicySpec.file`), and one network is loaded per (kind, path, greedy)
-(and the file's other keys, such as a checkpoint's `module`) in a process, whichever kind.
+against the policy file (`PolicySpec.file`), and one network is loaded per (kind, path, greedy,
+temperature) (and the file's other keys, such as a checkpoint's `module`) in a process,
+whichever kind.
 
 Many agents of one policy can share one forward pass: `prefetch` computes the actions of a batch
 of agents from their observations and parks each one on its agent, whose next `act` returns it.
@@ -23,6 +26,7 @@ until then, and always in Team) and speaks the net's two words. A Team network s
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping, Sequence
 from functools import cache
 from pathlib import Path
@@ -71,9 +75,10 @@ class LearnedPolicy:
     """One network shared by every agent of a policy in this process; `source` is the file its
     weights were read from (a state_dict, or a checkpoint's module state)."""
 
-    def __init__(self, net: PommerNet, greedy: bool, source: Path):
+    def __init__(self, net: PommerNet, greedy: bool, source: Path, temperature: float = 1.0):
         self.net = net
         self.greedy = greedy
+        self.temperature = temperature
         self.source = source
         self.radio = isinstance(net, RadioNet)
 
@@ -107,7 +112,7 @@ class LearnedPolicy:
         those that speak (`LearnedAgent.speaking`), drawn after the move from its own stream."""
         if messages is None:
             messages = np.array([agent.heard for agent in agents], np.int64)
-        logits = self.logits(obs, messages)
+        logits = self.logits(obs, messages) / self.temperature
         moves = self.choose(_softmax(logits[:, :NUM_ACTIONS]), [a.rng for a in agents])
         said = [SILENCE] * len(agents)
         talkers = [i for i, agent in enumerate(agents) if agent.speaking]
@@ -174,7 +179,7 @@ def learned_agent(policy: LearnedPolicy) -> LearnedAgent:
     return RadioAgent(policy) if policy.radio else LearnedAgent(policy)
 
 
-# A policy's path and its file's other keys (but `greedy`) -> its network and the file it read.
+# A policy's path and its file's other keys (but how it acts) -> its network and the file it read.
 Loader = Callable[[Path, Mapping[str, Any]], tuple[PommerNet, Path]]
 LOADERS: dict[str, tuple[str, Loader]] = {}  # kind -> (the key naming its path, its loader)
 
@@ -184,13 +189,28 @@ def register_learned_kind(kind: str, key: str, load: Loader) -> None:
     the file) that `load` reads a network from, given the file's other keys."""
     LOADERS[kind] = (key, load)
     register_kind(kind, lambda spec: learned_agent(_shared_policy(
-        kind, spec.file(key), bool(spec.params.get("greedy", False)), _options(spec, key))))
+        kind, spec.file(key), bool(spec.params.get("greedy", False)), _temperature(spec),
+        _options(spec, key))))
+
+
+ACTING_KEYS = ("greedy", "temperature")  # how a learned policy acts, not which network it is
+
+
+def _temperature(spec: PolicySpec) -> float:
+    """The file's sampling temperature (1.0 if absent); a ValueError naming the file unless it
+    is a positive finite number."""
+    value = spec.params.get("temperature", 1.0)
+    if not math.isfinite(value) or value <= 0:
+        raise ValueError(f"policy file {spec.path}: temperature must be a positive number, "
+                         f"got {value!r}")
+    return float(value)
 
 
 def _options(spec: PolicySpec, key: str) -> tuple[tuple[str, Any], ...]:
     """The policy file's keys that choose its network besides its path (e.g. a checkpoint's
     `module`), hashable."""
-    return tuple(sorted((k, v) for k, v in spec.params.items() if k not in (key, "greedy")))
+    return tuple(sorted((k, v) for k, v in spec.params.items()
+                        if k != key and k not in ACTING_KEYS))
 
 
 def load_learned(spec: PolicySpec) -> tuple[PommerNet, Path]:
@@ -205,10 +225,10 @@ def load_learned(spec: PolicySpec) -> tuple[PommerNet, Path]:
 
 
 @cache
-def _shared_policy(kind: str, path: Path, greedy: bool,
+def _shared_policy(kind: str, path: Path, greedy: bool, temperature: float,
                    options: tuple[tuple[str, Any], ...]) -> LearnedPolicy:
     net, source = LOADERS[kind][1](path, dict(options))
-    return LearnedPolicy(net, greedy, source)
+    return LearnedPolicy(net, greedy, source, temperature)
 
 
 def _load_weights(path: Path, options: Mapping[str, Any]) -> tuple[PommerNet, Path]:
