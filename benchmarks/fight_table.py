@@ -29,6 +29,8 @@ from rllib_pommer.viz.matches import read_rows
 
 def _label(team: str) -> str:
     path = Path(team.split("@")[0])
+    if path.suffix == ".toml":  # a policy file: name it as the file names it
+        return path.stem
     if len(path.parts) > 1:  # a run folder: name it by run and stage
         return "/".join(Path(team).parts[-3:]).replace("/stages/", ":")
     return team
