@@ -2,9 +2,12 @@
 
     python benchmarks/fuzz_engine.py [--steps 10000000] [--games 512] [--seed 0]
 
-Games run in one batch (Team and FFA alternate by slot; every third slot gets a power start with
-kick and 3 ammo, so kicks and chains are common); finished games are replaced by new boards. Any
-violation is printed with the game seed and step and the run exits 1. Not part of CI.
+Team, FFA and TeamRadio each take a third of the steps, each in one batch of games (every third
+slot gets a power start with kick and 3 ammo, so kicks and chains are common); finished games are
+replaced by new boards. In TeamRadio every agent sends two random words a step, and after each
+step the channel must hold them for the agents alive at its start and (0, 0) for the others
+(docs/rules.md §10). Any violation is printed with the game seed and step and the run exits 1.
+Not part of CI.
 """
 
 from __future__ import annotations
@@ -17,10 +20,16 @@ import numpy as np
 from numba import njit
 from tqdm import tqdm
 
-from rllib_pommer.game.constants import FFA_PRESET, TEAM_PRESET
+from rllib_pommer.game.constants import (
+    FFA_PRESET,
+    RADIO_NUM_WORDS,
+    RADIO_PRESET,
+    RADIO_VOCAB_SIZE,
+    TEAM_PRESET,
+)
 from rllib_pommer.game.engine import Games
 from rllib_pommer.game.invariants import VIOLATIONS, step_violation
-from rllib_pommer.game.state import A_AMMO, A_KICK, M_BOMBS, M_DONE, M_ITEMS
+from rllib_pommer.game.state import A_ALIVE, A_AMMO, A_KICK, M_BOMBS, M_DONE, M_ITEMS
 
 
 @njit(cache=True)
@@ -52,9 +61,19 @@ def fuzz(config, games: int, steps: int, rng: np.random.Generator, bar) -> tuple
         before = (s.board.copy(), s.agents.copy(), s.bombs.copy(), s.items.copy(), s.meta.copy())
         was_done = s.meta[:, M_DONE] != 0
         actions = rng.choice(6, size=(games, 4), p=[0.15, 0.15, 0.15, 0.15, 0.15, 0.25])
-        batch.step(actions)
+        if batch.radio:
+            words = rng.integers(0, RADIO_VOCAB_SIZE, (games, 4, RADIO_NUM_WORDS))
+            batch.step(np.concatenate([actions[..., None], words], axis=-1))
+        else:
+            batch.step(actions)
         _check_batch(*before, actions, s.board, s.agents, s.bombs, s.flames, s.meta, capacity,
                      was_done, codes)
+        if batch.radio:
+            sent = np.where(before[1][:, :, A_ALIVE, None] != 0, words, 0)
+            wrong = ~was_done & (s.radio != sent).any(axis=(1, 2))
+            for n in np.flatnonzero(wrong):
+                failures.append(f"{config.name} seed {seeds[n]} step {game_step[n] + 1}: the "
+                                f"channel holds {s.radio[n].tolist()}, sent {sent[n].tolist()}")
         live = int((~was_done).sum())
         done_steps += live
         game_step += ~was_done
@@ -84,8 +103,8 @@ def main() -> int:
     start = time.perf_counter()
     total, failures = 0, []
     with tqdm(total=args.steps, unit="step", unit_scale=True, mininterval=2) as bar:
-        for config in (TEAM_PRESET, FFA_PRESET):
-            steps, found = fuzz(config, args.games, args.steps // 2, rng, bar)
+        for config in (TEAM_PRESET, FFA_PRESET, RADIO_PRESET):
+            steps, found = fuzz(config, args.games, args.steps // 3, rng, bar)
             total += steps
             failures += found
     for line in failures[:20]:
