@@ -17,7 +17,7 @@ import numpy as np
 
 from ..agents.registry import make_agent
 from ..agents.speaker import radio_act
-from ..game.constants import NUM_AGENTS, TEAM_PRESET
+from ..game.constants import NUM_AGENTS, RADIO_PRESET, TEAM_PRESET, has_radio
 from ..game.engine import Game
 from ..game.observation import Observation
 from .protocol import BadRequest
@@ -38,19 +38,24 @@ class PolicyHost:
         self.seat: Seat | None = None  # set by the first /init_agent
 
     def warm_up(self, steps: int = 5) -> None:
-        """Play a few steps of a throwaway game on every seat, so compiled kernels (numba, on a
-        fresh install) and the first forward passes run now, not in the first real move (which
-        the competition's runner gives 0.15 s); then forget that game. The seeding of real
-        games is unchanged."""
-        game = Game(TEAM_PRESET)
-        for agent_id in range(NUM_AGENTS):
-            obs = game.reset(agent_id)
-            self.agent.reset(agent_id, TEAM_PRESET.game_type, np.random.default_rng(0))
-            for _ in range(steps):
-                self.act(obs.select(agent_id))
-                obs, _, done, _ = game.step([0] * NUM_AGENTS)
-                if done:
-                    break
+        """Play a few steps of a throwaway Team game and a throwaway TeamRadio game on every
+        seat, so compiled kernels (numba, on a fresh install; TeamRadio steps words through
+        kernels of their own) and the first forward passes run now, not in the first real move
+        (which the competition's runner gives 0.15 s); then forget those games. The seeding of
+        real games is unchanged."""
+        for preset in (TEAM_PRESET, RADIO_PRESET):
+            game = Game(preset)
+            radio = has_radio(preset.game_type)
+            for agent_id in range(NUM_AGENTS):
+                obs = game.reset(agent_id)
+                self.agent.reset(agent_id, preset.game_type, np.random.default_rng(0))
+                for _ in range(steps):
+                    heard = game.message[agent_id].tolist() if radio else None
+                    actions: list = [0] * NUM_AGENTS
+                    actions[agent_id] = self.act(obs.select(agent_id), heard)
+                    obs, _, done, _ = game.step(actions)
+                    if done:
+                        break
         self.seat = None
         self.games_started = 0
 

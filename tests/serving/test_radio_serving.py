@@ -16,6 +16,7 @@ from rllib_pommer.arena.match import MatchSpec, play_match, record_games
 from rllib_pommer.game.constants import RADIO_PRESET, GameType
 from rllib_pommer.game.engine import Game
 from rllib_pommer.game.serialize import dump_observation
+from rllib_pommer.serving.policy_host import PolicyHost, Seat
 
 from .conftest import games_played, http_policy
 from .test_http_agent import fake_remote
@@ -143,3 +144,18 @@ def test_a_served_radio_net_plays_exactly_the_in_process_radio_match(serve, tmp_
         MatchSpec(**{**local, "team": remote}), 1)[0]["steps"]]
     assert served_turns == turns and any(t[s][1:] != [0, 0] for t in turns for s in (0, 2)
                                          if isinstance(t[s], list))
+
+
+def test_warming_up_leaves_the_served_radio_games_unchanged():
+    """The warm-up plays a throwaway TeamRadio game too (its kernels compile then); a warmed
+    speaker then answers a real radio game word for word as a cold one does."""
+    seen = radio_observations(15)
+    cold, warm = PolicyHost("simple_words", seed=4), PolicyHost("simple_words", seed=4)
+    warm.warm_up()
+    assert warm.seat is None and warm.games_started == 0
+    answers = []
+    for host in (cold, warm):
+        host.start_game(Seat(SEAT, RADIO))
+        answers.append([host.act(obs, message.tolist()) for obs, message in seen])
+    assert answers[0] == answers[1]
+    assert any(words != [0, 0] for _, *words in answers[0])  # it speaks
