@@ -61,15 +61,15 @@ def fuzz(config, games: int, steps: int, rng: np.random.Generator, bar) -> tuple
         before = (s.board.copy(), s.agents.copy(), s.bombs.copy(), s.items.copy(), s.meta.copy())
         was_done = s.meta[:, M_DONE] != 0
         actions = rng.choice(6, size=(games, 4), p=[0.15, 0.15, 0.15, 0.15, 0.15, 0.25])
-        if batch.radio:
+        if batch.radio:  # the words the channel must hold: (0, 0) from agents dead already
             words = rng.integers(0, RADIO_VOCAB_SIZE, (games, 4, RADIO_NUM_WORDS))
+            sent = np.where(s.agents[:, :, A_ALIVE, None] != 0, words, 0)
             batch.step(np.concatenate([actions[..., None], words], axis=-1))
         else:
             batch.step(actions)
         _check_batch(*before, actions, s.board, s.agents, s.bombs, s.flames, s.meta, capacity,
                      was_done, codes)
         if batch.radio:
-            sent = np.where(before[1][:, :, A_ALIVE, None] != 0, words, 0)
             wrong = ~was_done & (s.radio != sent).any(axis=(1, 2))
             for n in np.flatnonzero(wrong):
                 failures.append(f"{config.name} seed {seeds[n]} step {game_step[n] + 1}: the "

@@ -31,7 +31,7 @@ class _StamplessGzip(gzip.GzipFile):
         # The raw file lives as long as this object and is closed by close(), not by a with-block.
         raw = open(path, "wb")  # noqa: SIM115
         super().__init__(filename="", mode="wb", fileobj=raw, mtime=0)
-        self._owned = self.fileobj
+        self._owned = raw
 
     def close(self) -> None:
         try:

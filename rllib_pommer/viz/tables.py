@@ -107,18 +107,18 @@ def phase_progress_table(curves: list[TrainingCurve], marks=PHASE_MARKS) -> str:
     last row within that many of its games (the window restarts with the phase); "—" where the
     phase did not get there. Runs that meet the same opponent at different points of their
     lives are compared from their first game against it."""
-    spans = []  # (stage, run, curve, first row, end row, episodes before the phase)
+    spans = []  # (stage, curve, first row, end row, episodes before the phase)
     for curve in curves:
         for start, end, stage in phases(curve.stages):
             if stage:
-                before = curve.episodes[start - 1] if start else 0.0
-                spans.append((stage, curve.name, curve, start, end, before))
-    spans.sort(key=lambda span: (span[0], span[1]))
+                spans.append((stage, curve, start, end,
+                              curve.episodes[start - 1] if start else 0.0))
+    spans.sort(key=lambda span: (span[0], span[1].name))
     reached = [m for m in marks
-               if any(c.episodes[end - 1] - before >= m for _, _, c, _, end, before in spans)]
+               if any(c.episodes[end - 1] - before >= m for _, c, _, end, before in spans)]
     lines = ["| phase | run | " + " | ".join(f"{m:,} games in" for m in reached)
              + " | at its end |", "|---" * (len(reached) + 3) + "|"]
-    for stage, name, curve, start, end, before in spans:
+    for stage, curve, start, end, before in spans:
         games = curve.episodes[start:end] - before
         cells = []
         for m in reached:
@@ -126,5 +126,5 @@ def phase_progress_table(curves: list[TrainingCurve], marks=PHASE_MARKS) -> str:
             cells.append(_outcome(curve, start + rows[-1]) if games[-1] >= m and len(rows)
                          else "—")
         cells.append(f"{_outcome(curve, end - 1)} ({games[-1]:,.0f} games)")
-        lines.append(f"| {stage} | {name} | " + " | ".join(cells) + " |")
+        lines.append(f"| {stage} | {curve.name} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
