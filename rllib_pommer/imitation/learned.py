@@ -3,8 +3,8 @@
 A policy file of kind "learned" names its weights (`weights = "imitation/pi.pt"`, relative to the
 file) and how to act (`greedy = false` samples from the softmax with the agent's own random
 stream, as PPO's stochastic policy does; `true` takes the most likely action; `temperature`,
-1.0 unless said, divides the logits before a sampled choice: below 1 sharpens the distribution
-toward the greedy action, above 1 flattens it). Weights load with
+1.0 unless said, divides the logits before a sampled choice, of a move and of a RadioNet's words
+alike: below 1 sharpens the distribution toward the greedy action, above 1 flattens it). Weights load with
 `torch.load(weights_only=True)`: plain tensors only, no arbitrary pickle.
 
 Both kinds of learned policy are played here: "learned" (a state_dict file) and, registered by
@@ -94,8 +94,9 @@ class LearnedPolicy:
         return self.net(planes, torch.from_numpy(message_features(messages)))
 
     def probabilities(self, obs: Observation, messages: np.ndarray | None = None) -> np.ndarray:
-        """Move probabilities (B, 6) for observations with leading shape (B,) (`logits`)."""
-        return _softmax(self.logits(obs, messages)[:, :NUM_ACTIONS])
+        """Move probabilities (B, 6) at the policy's temperature, the distribution its moves are
+        drawn from, for observations with leading shape (B,) (`logits`)."""
+        return _softmax(self.logits(obs, messages)[:, :NUM_ACTIONS] / self.temperature)
 
     def choose(self, probs: np.ndarray, rngs: Sequence[np.random.Generator]) -> np.ndarray:
         if self.greedy:
