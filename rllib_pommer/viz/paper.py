@@ -77,7 +77,9 @@ FIG3_CLAIMS = (
      "is harder to assign.", "`cautious`: `value_warmup` and `simple`"),
     ("Without a curriculum (shaping, SimpleAgent from the start, teammate removed) learning is "
      "slow; both curriculum runs progress much faster.",
-     "`simple`: `no_curriculum` against `paper` and `cautious`"),
+     "`simple`: `no_curriculum` against `paper` and `no_shaping`, the two curriculum runs (the "
+     "paper's text names its blue and orange curves, but blue is the cautious run, which has no "
+     "curriculum; `cautious` is in the rows too)"),
     ("Without shaping (a tie pays -1 like a loss) learning is hard: the run deteriorates "
      "against SimpleAgent_NoBomb.", "`simple_nobomb` (and `static`): `no_shaping` against "
      "`paper`"),
