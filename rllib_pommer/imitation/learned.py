@@ -4,8 +4,8 @@ A policy file of kind "learned" names its weights (`weights = "imitation/pi.pt"`
 file) and how to act (`greedy = false` samples from the softmax with the agent's own random
 stream, as PPO's stochastic policy does; `true` takes the most likely action; `temperature`,
 1.0 unless said, divides the logits before a sampled choice, of a move and of a RadioNet's words
-alike: below 1 sharpens the distribution toward the greedy action, above 1 flattens it). Weights load with
-`torch.load(weights_only=True)`: plain tensors only, no arbitrary pickle.
+alike: below 1 sharpens the distribution toward the greedy action, above 1 flattens it). Weights
+load with `torch.load(weights_only=True)`: plain tensors only, no arbitrary pickle.
 
 Both kinds of learned policy are played here: "learned" (a state_dict file) and, registered by
 `rl/checkpoint_policy.py`, "rllib_checkpoint" (a PPO run's learner). Each kind registers the key

@@ -293,7 +293,8 @@ def training_curve(trial: Trial | Path, window: int = WINDOW) -> TrainingCurve:
                          [str(row.get(REWARD_COLUMN) or "") for row in kept],
                          curve(_values(kept, "env_runners/learner_win")),
                          curve(_values(kept, "env_runners/learner_loss")),
-                         curve(_values(kept, "env_runners/learner_kills")))
+                         curve(_values(kept, "env_runners/learner_kills")),
+                         curve(_values(kept, "env_runners/learner_bombs")))
 
 
 def _phase_means(values: np.ndarray, counts: np.ndarray, stages: list[str],

@@ -75,16 +75,30 @@ def _mark_phase(ax, episode: float, stage: str, colour: str, run: int) -> None:
                     va="top", fontsize=8, color=colour, xycoords=("data", "axes fraction"))
 
 
+# The panels below the outcomes: (TrainingCurve field, axis label, axis top).
+OUTCOME_PANELS = (("kills", "enemies killed per game", 2),
+                  ("bombs", "bombs laid per agent per game", 20))
+
+
 def plot_outcomes(curves: list[TrainingCurve], out: Path) -> Figure:
     """Beside Fig. 3: each run's training win rate (solid) and loss rate (dashed), the same
-    rolling means per phase; one scale for every run, whatever its reward. Below, where a run
-    logs them, the enemies its team killed per game (game/kills.py)."""
-    killing = [curve for curve in curves if np.isfinite(curve.kills).any()]
-    fig = Figure(figsize=(9, 4.2 + 3.0 * bool(killing)), layout="constrained")
-    ax, *kills_ax = fig.subplots(1 + bool(killing), 1, sharex=True, squeeze=False)[:, 0]
+    rolling means per phase; one scale for every run, whatever its reward. Below, where some run
+    logs them, one panel each for the enemies its team killed per game (game/kills.py) and the
+    bombs each learner agent laid per game: a run that learns to hide lays none."""
+    below = [(field, label, top) for field, label, top in OUTCOME_PANELS
+             if any(np.isfinite(getattr(curve, field)).any() for curve in curves)]
+    fig = Figure(figsize=(9, 4.2 + 3.0 * len(below)), layout="constrained")
+    ax, *panels = fig.subplots(1 + len(below), 1, sharex=True, squeeze=False)[:, 0]
+    for panel, (field, label, top) in zip(panels, below, strict=True):
+        for k, curve in enumerate(curves):
+            if np.isfinite(getattr(curve, field)).any():
+                panel.plot(curve.episodes, getattr(curve, field), color=f"C{k % 10}",
+                           label=curve.name)
+        panel.set_ylabel(f"{label}\n(the same rolling means)")
+        panel.set_ylim(0, top)
+        panel.grid(alpha=0.3)
+        panel.legend(fontsize=8, loc="best")
     for k, curve in enumerate(curves):
-        if kills_ax and curve in killing:
-            kills_ax[0].plot(curve.episodes, curve.kills, color=f"C{k % 10}", label=curve.name)
         colour = f"C{k % 10}"
         for n, (start, end, stage) in enumerate(phases(curve.stages)):
             part = slice(start, end)
@@ -96,12 +110,7 @@ def plot_outcomes(curves: list[TrainingCurve], out: Path) -> Figure:
     ax.set_ylim(0, 1)
     ax.set_ylabel(f"learner's team: {WINDOW:,}-episode\nmean of RLlib's {RLLIB_WINDOW}-episode "
                   f"rates")
-    if kills_ax:
-        kills_ax[0].set_ylabel("enemies killed per game\n(the same rolling means)")
-        kills_ax[0].set_ylim(0, 2)
-        kills_ax[0].grid(alpha=0.3)
-        kills_ax[0].legend(fontsize=8, loc="best")
-    (kills_ax or [ax])[0].set_xlabel("training episodes (lifetime)")
+    (panels or [ax])[-1].set_xlabel("training episodes (lifetime)")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="best")
     fig.suptitle("Training win and loss rates per curriculum phase (beside Fig. 3)")

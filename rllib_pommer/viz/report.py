@@ -94,10 +94,13 @@ def fig3_section(training: Training, out: Path, summaries: str = "") -> Iterator
            f"by the episodes it finished), restarted at each phase.")
     yield "![training win and loss rates](fig3_outcomes.png)"
     yield ("The same means of the learner's team's win and loss rates: one scale for every "
-           "run, whatever reward it was paid.")
+           "run, whatever reward it was paid; below, where runs log them, the enemies its team "
+           "killed and the bombs each learner agent laid per game (a run that learns to hide "
+           "stops laying bombs).")
     if len(training.curves) > 1:
         yield ("Where each run stood after the same numbers of games: the win / loss means "
-               "above (and enemies its team killed per game, where logged), with the phase in "
+               "above (and, where logged, enemies its team killed and bombs each of its learner "
+               "agents laid per game), with the phase in "
                "force; runs meet different opponents at the same count, so read the phase too.")
         yield milestones_table(training.curves)
         yield ("How fast each run learned within a phase: the same means counted from the "

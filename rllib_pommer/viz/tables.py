@@ -74,15 +74,16 @@ def training_table(figures: list[StageFigures]) -> str:
 
 
 def _outcome(curve: TrainingCurve, i: int) -> str:
-    """Row `i` of `curve`: win / loss, and kills per game where logged."""
+    """Row `i` of `curve`: win / loss, and kills and bombs per game where logged."""
     kills = "" if math.isnan(curve.kills[i]) else f", kills {curve.kills[i]:.2f}"
-    return f"{_figure(curve.wins[i], 2)} / {_figure(curve.losses[i], 2)}{kills}"
+    bombs = "" if math.isnan(curve.bombs[i]) else f", bombs {curve.bombs[i]:.1f}"
+    return f"{_figure(curve.wins[i], 2)} / {_figure(curve.losses[i], 2)}{kills}{bombs}"
 
 
 def milestones_table(curves: list[TrainingCurve], milestones=MILESTONES) -> str:
     """One row per run, one column per number of games any run reached: the curves' rolling
-    win / loss rates (and kills per game where logged) at the run's last row within that many
-    games, and the phase it was in; "—" where the run had not got there."""
+    win / loss rates (and kills and bombs per game where logged) at the run's last row within
+    that many games, and the phase it was in; "—" where the run had not got there."""
     reached = [m for m in milestones if any(len(c.episodes) and c.episodes[-1] >= m
                                             for c in curves)]
     lines = ["| run | " + " | ".join(f"{m:,} games" for m in reached) + " |",
@@ -103,9 +104,9 @@ def milestones_table(curves: list[TrainingCurve], milestones=MILESTONES) -> str:
 def phase_progress_table(curves: list[TrainingCurve], marks=PHASE_MARKS) -> str:
     """How fast each run learned within each phase: one row per run and named phase, rows of
     the same phase together, one column per number of games into the phase that some phase
-    reached, and the phase's end. A cell is the rolling win / loss (and kills) at the phase's
-    last row within that many of its games (the window restarts with the phase); "—" where the
-    phase did not get there. Runs that meet the same opponent at different points of their
+    reached, and the phase's end. A cell is the rolling win / loss (and kills and bombs) at the
+    phase's last row within that many of its games (the window restarts with the phase); "—"
+    where the phase did not get there. Runs that meet the same opponent at different points of their
     lives are compared from their first game against it."""
     spans = []  # (stage, curve, first row, end row, episodes before the phase)
     for curve in curves:

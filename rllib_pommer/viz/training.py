@@ -31,10 +31,12 @@ class TrainingCurve:
     losses: np.ndarray
     kills: np.ndarray | None = None  # enemies its team killed per game, the same mean (NaN: not
     # logged; None: all NaN)
+    bombs: np.ndarray | None = None  # bombs each learner agent laid per game, the same
 
     def __post_init__(self):
-        if self.kills is None:
-            self.kills = np.full(len(self.episodes), np.nan)
+        for field in ("kills", "bombs"):
+            if getattr(self, field) is None:
+                setattr(self, field, np.full(len(self.episodes), np.nan))
 
 
 @dataclass

@@ -59,6 +59,18 @@ def test_win_and_loss_curves_are_the_same_means_and_skip_rows_without_them(tmp_p
         f"{curve.name}: win", f"{curve.name}: loss"]
 
 
+def test_kills_and_bombs_curves_are_the_same_means_where_logged(tmp_path):
+    trial = tmp_path / "PPO_pommer_00000"
+    trial.mkdir()
+    (trial / "progress.csv").write_text(
+        "env_runners/episode_return_mean,env_runners/num_episodes_lifetime,curriculum_stage,"
+        "env_runners/learner_kills,env_runners/learner_bombs\n"
+        "0.0,500,nobomb,1.0,15.0\n0.0,1000,nobomb,0.0,1.0\n0.0,1500,nobomb,,\n")
+    curve = training_curve(trial)
+    np.testing.assert_allclose(curve.kills, [1.0, 0.5, 0.5])
+    np.testing.assert_allclose(curve.bombs, [15.0, 8.0, 8.0])
+
+
 def test_training_curve_from_nested_result_json_without_stages(tmp_path):
     rows = [{"env_runners": {"episode_return_mean": r, "num_episodes": 10}} for r in (1, 3)]
     (tmp_path / "result.json").write_text("".join(json.dumps(r) + "\n" for r in rows))

@@ -129,15 +129,21 @@ def test_fig5_names_its_policies_and_explains_its_marks(tmp_path):
     assert fig.get_supxlabel() == FIG5_MARKS and "circle" in FIG5_MARKS
 
 
-def test_training_outcomes_draw_kills_where_a_run_logs_them(tmp_path):
+def test_training_outcomes_draw_kills_and_bombs_where_a_run_logs_them(tmp_path):
     episodes = np.arange(1, 5) * 100.0
     logged = TrainingCurve("league", episodes, np.zeros(4), ["a"] * 4, ["raw_kills"] * 4,
-                           np.full(4, 0.5), np.full(4, 0.1), np.linspace(0.2, 0.8, 4))
+                           np.full(4, 0.5), np.full(4, 0.1), np.linspace(0.2, 0.8, 4),
+                           np.linspace(12.0, 0.5, 4))
     silent = TrainingCurve("paper", episodes, np.zeros(4), ["a"] * 4, ["shaped"] * 4,
                            np.full(4, 0.5), np.full(4, 0.1))
-    outcomes, kills = plot_outcomes([logged, silent], tmp_path / "o.png").axes
+    outcomes, kills, bombs = plot_outcomes([logged, silent], tmp_path / "o.png").axes
     assert [t.get_text() for t in kills.get_legend().get_texts()] == ["league"]
     assert "killed per game" in kills.get_ylabel()
+    assert "bombs laid" in bombs.get_ylabel()
+    np.testing.assert_allclose(bombs.get_lines()[0].get_ydata(), logged.bombs)
+    kills_only = TrainingCurve("cautious", episodes, np.zeros(4), ["a"] * 4, ["shaped"] * 4,
+                               np.full(4, 0.5), np.full(4, 0.1), np.full(4, 0.3))
+    assert len(plot_outcomes([kills_only], tmp_path / "o.png").axes) == 2
     assert len(plot_outcomes([silent], tmp_path / "o.png").axes) == 1
     (axis,) = plot_training([logged], tmp_path / "fig3.png").axes
     assert "credited kill" in axis.get_title()
@@ -167,14 +173,14 @@ def test_phase_progress_counts_games_from_each_phase_start_and_groups_phases():
     flat = TrainingCurve("no_curriculum", np.array([10_000.0, 11_000, 12_000]), np.zeros(3),
                          ["warmup", "simple", "simple"], ["shaped"] * 3,
                          np.array([0.2, 0.25, 0.3]), np.array([0.7, 0.65, 0.6]),
-                         np.array([np.nan, 0.2, 0.3]))
+                         np.array([np.nan, 0.2, 0.3]), np.array([np.nan, 9.25, 8.5]))
     header, rule, *rows = phase_progress_table([paper, flat], (1_000, 2_500, 5_000)).splitlines()
     assert header == ("| phase | run | 1,000 games in | 2,500 games in | 5,000 games in "
                       "| at its end |")
     assert rows == [  # a phase with no row yet within m of its games has no figure there
         "| nobomb | paper | — | — | — | 0.50 / 0.20 (30,000 games) |",
-        "| simple | no_curriculum | 0.25 / 0.65, kills 0.20 | — | — | "
-        "0.30 / 0.60, kills 0.30 (2,000 games) |",
+        "| simple | no_curriculum | 0.25 / 0.65, kills 0.20, bombs 9.2 | — | — | "
+        "0.30 / 0.60, kills 0.30, bombs 8.5 (2,000 games) |",
         "| simple | paper | 0.55 / 0.30 | 0.60 / 0.25 | 0.70 / 0.20 | 0.70 / 0.20 "
         "(5,000 games) |",
         "| warmup | no_curriculum | — | — | — | 0.20 / 0.70 (10,000 games) |",
