@@ -96,7 +96,11 @@ class LearnedPolicy:
     def probabilities(self, obs: Observation, messages: np.ndarray | None = None) -> np.ndarray:
         """Move probabilities (B, 6) at the policy's temperature, the distribution its moves are
         drawn from, for observations with leading shape (B,) (`logits`)."""
-        return _softmax(self.logits(obs, messages)[:, :NUM_ACTIONS] / self.temperature)
+        return _softmax(self.tempered_logits(obs, messages)[:, :NUM_ACTIONS])
+
+    def tempered_logits(self, obs: Observation, messages: np.ndarray | None = None) -> torch.Tensor:
+        """`logits` divided by the policy's temperature: what moves and words are drawn from."""
+        return self.logits(obs, messages) / self.temperature
 
     def choose(self, probs: np.ndarray, rngs: Sequence[np.random.Generator]) -> np.ndarray:
         if self.greedy:
@@ -113,7 +117,7 @@ class LearnedPolicy:
         those that speak (`LearnedAgent.speaking`), drawn after the move from its own stream."""
         if messages is None:
             messages = np.array([agent.heard for agent in agents], np.int64)
-        logits = self.logits(obs, messages) / self.temperature
+        logits = self.tempered_logits(obs, messages)
         moves = self.choose(_softmax(logits[:, :NUM_ACTIONS]), [a.rng for a in agents])
         said = [SILENCE] * len(agents)
         talkers = [i for i, agent in enumerate(agents) if agent.speaking]

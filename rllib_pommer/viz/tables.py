@@ -106,8 +106,8 @@ def phase_progress_table(curves: list[TrainingCurve], marks=PHASE_MARKS) -> str:
     the same phase together, one column per number of games into the phase that some phase
     reached, and the phase's end. A cell is the rolling win / loss (and kills and bombs) at the
     phase's last row within that many of its games (the window restarts with the phase); "—"
-    where the phase did not get there. Runs that meet the same opponent at different points of their
-    lives are compared from their first game against it."""
+    where the phase did not get there. Runs that meet the same opponent at different points of
+    their lives are compared from their first game against it."""
     spans = []  # (stage, curve, first row, end row, episodes before the phase)
     for curve in curves:
         for start, end, stage in phases(curve.stages):

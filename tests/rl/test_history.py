@@ -19,6 +19,14 @@ from rllib_pommer.viz.figures import plot_outcomes
 from rllib_pommer.viz.tables import training_table
 
 
+def _trial_with_progress(folder, progress_csv: str):
+    """A trial folder in `folder` whose progress.csv is `progress_csv`."""
+    trial = folder / "PPO_pommer_00000"
+    trial.mkdir()
+    (trial / "progress.csv").write_text(progress_csv)
+    return trial
+
+
 def test_rolling_mean_weights_rows_by_their_episodes():
     means, counts = np.array([0.0, 0.0, 1.0]), np.array([500, 500, 500])
     np.testing.assert_allclose(rolling_mean(means, counts, window=1000), [0, 0, 0.5])
@@ -26,9 +34,8 @@ def test_rolling_mean_weights_rows_by_their_episodes():
 
 
 def test_training_curve_from_progress_csv_restarts_at_each_phase(tmp_path):
-    trial = tmp_path / "PPO_pommer_00000"
-    trial.mkdir()
-    (trial / "progress.csv").write_text(
+    trial = _trial_with_progress(
+        tmp_path,
         "training_iteration,env_runners/episode_return_mean,env_runners/num_episodes_lifetime,"
         "curriculum_stage\n"
         "1,,0,static\n"  # no episode finished yet: skipped
@@ -42,9 +49,8 @@ def test_training_curve_from_progress_csv_restarts_at_each_phase(tmp_path):
 def test_win_and_loss_curves_are_the_same_means_and_skip_rows_without_them(tmp_path):
     """Weighted by episodes, restarted per phase; a row that logged no rate weighs nothing, a
     phase without any is NaN; the figure draws both per run on one 0..1 axis."""
-    trial = tmp_path / "PPO_pommer_00000"
-    trial.mkdir()
-    (trial / "progress.csv").write_text(
+    trial = _trial_with_progress(
+        tmp_path,
         "env_runners/episode_return_mean,env_runners/num_episodes_lifetime,curriculum_stage,"
         "env_runners/learner_win,env_runners/learner_loss\n"
         "0.0,500,static,0.2,0.6\n0.0,1000,static,,\n0.0,1500,static,0.6,0.2\n"
@@ -60,9 +66,8 @@ def test_win_and_loss_curves_are_the_same_means_and_skip_rows_without_them(tmp_p
 
 
 def test_kills_and_bombs_curves_are_the_same_means_where_logged(tmp_path):
-    trial = tmp_path / "PPO_pommer_00000"
-    trial.mkdir()
-    (trial / "progress.csv").write_text(
+    trial = _trial_with_progress(
+        tmp_path,
         "env_runners/episode_return_mean,env_runners/num_episodes_lifetime,curriculum_stage,"
         "env_runners/learner_kills,env_runners/learner_bombs\n"
         "0.0,500,nobomb,1.0,15.0\n0.0,1000,nobomb,0.0,1.0\n0.0,1500,nobomb,,\n")
