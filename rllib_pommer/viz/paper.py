@@ -9,6 +9,7 @@ reads "016" for the loss rate; 0.16 makes the row sum to 1.
 from __future__ import annotations
 
 import re
+from dataclasses import dataclass
 
 from .matches import VARIANTS
 
@@ -67,22 +68,35 @@ PAPER_TABLES: dict[str, tuple[str, dict[str, dict[str, Cell]]]] = {
 }
 
 
+@dataclass(frozen=True)
+class Fig3Claim:
+    """One reading of the paper's Fig. 3, in our words, and where our runs test it: the rows of
+    the phase table (`tables.phase_progress_table`) of `runs` in `phases`; `note` says what the
+    rows need said beside them."""
+
+    reading: str
+    phases: tuple[str, ...]
+    runs: tuple[str, ...]
+    note: str = ""
+
+
 # What the paper reads in its Fig. 3 (four runs of 100,000 games: the curriculum with shaping,
-# the cautious agent, the curriculum without shaping, shaping without a curriculum), in our words,
-# each with the phase rows of our runs that test it (their curricula: curriculum/*.toml).
+# the cautious agent, the curriculum without shaping, shaping without a curriculum), each with
+# the runs and phases of ours that test it (their curricula: curriculum/*.toml).
 FIG3_CLAIMS = (
-    ("After training, the reward is above the imitation policy's, which the value warm-up "
-     "measures (the policy is frozen there).", "`paper`: `value_warmup` against `simple`"),
-    ("The cautious agent's reward first falls, then settles: its teammate is active, so credit "
-     "is harder to assign.", "`cautious`: `value_warmup` and `simple`"),
-    ("Without a curriculum (shaping, SimpleAgent from the start, teammate removed) learning is "
-     "slow; both curriculum runs progress much faster.",
-     "`simple`: `no_curriculum` against `paper` and `no_shaping`, the two curriculum runs (the "
-     "paper's text names its blue and orange curves, but blue is the cautious run, which has no "
-     "curriculum; `cautious` is in the rows too)"),
-    ("Without shaping (a tie pays -1 like a loss) learning is hard: the run deteriorates "
-     "against SimpleAgent_NoBomb.", "`simple_nobomb` (and `static`): `no_shaping` against "
-     "`paper`"),
+    Fig3Claim("After training, the reward is above the imitation policy's, which the value "
+              "warm-up measures (the policy is frozen there).", ("value_warmup", "simple"),
+              ("paper",)),
+    Fig3Claim("The cautious agent's reward first falls, then settles: its teammate is active, "
+              "so credit is harder to assign.", ("value_warmup", "simple"), ("cautious",)),
+    Fig3Claim("Without a curriculum (shaping, SimpleAgent from the start, teammate removed) "
+              "learning is slow; both curriculum runs progress much faster.", ("simple",),
+              ("no_curriculum", "paper", "no_shaping", "cautious"),
+              "the paper's text names its blue and orange curves, but blue is the cautious run, "
+              "which has no curriculum either; `paper` and `no_shaping` are the curriculum runs"),
+    Fig3Claim("Without shaping (a tie pays -1 like a loss) learning is hard: the run "
+              "deteriorates against SimpleAgent_NoBomb.", ("static", "simple_nobomb"),
+              ("no_shaping", "paper")),
 )
 
 # Our recipes beyond the paper -> the paper's agent each sets out to beat (issue 14, item 6):

@@ -27,7 +27,7 @@ from .matches import ROW_KEYS, load_outcomes, rates_by_opponent
 from .paper import FIG3_CLAIMS, paper_table
 from .render import render_game
 from .tables import milestones_table, phase_progress_table, results_table, training_table
-from .training import RLLIB_WINDOW, WINDOW, Training
+from .training import RLLIB_WINDOW, WINDOW, Training, TrainingCurve
 from .viewer import write_viewer
 
 UNSAFE_IN_NAMES = re.compile(r"[^\w.-]+")
@@ -108,12 +108,24 @@ def fig3_section(training: Training, out: Path, summaries: str = "") -> Iterator
                "so runs that meet an opponent at different points of their lives compare from "
                "their first game against it.")
         yield phase_progress_table(training.curves)
-        yield ("What the paper reads in its Fig. 3, and the rows above that test it here:\n\n"
-               + "\n".join(f"- {claim} Rows: {rows}." for claim, rows in FIG3_CLAIMS))
+        yield from _fig3_claims(training.curves)
     yield training_table(training.stages)
     if summaries:
         yield (f"Each run's curve and training figures per iteration are in `{summaries}/<run>/"
                f"progress.csv` (a trial folder this report reads again).")
+
+
+def _fig3_claims(curves: list[TrainingCurve]) -> Iterator[str]:
+    """Each reading of the paper's Fig. 3, with the phase rows of the runs here that test it."""
+    yield "What the paper reads in its Fig. 3, each beside the phase rows that test it here:"
+    for claim in FIG3_CLAIMS:
+        tested = [curve for curve in curves if curve.name in claim.runs]
+        note = f" ({claim.note})" if claim.note else ""
+        runs = ", ".join(f"`{run}`" for run in claim.runs)
+        phases = ", ".join(f"`{phase}`" for phase in claim.phases)
+        yield f"*The paper:* {claim.reading} *Here*, {runs} in {phases}{note}:"
+        table = phase_progress_table(tested, only=claim.phases)
+        yield table if table.count("\n") > 1 else "none of these runs reached these phases."
 
 
 def _fig5_and_game(replays: list[Path], out: Path) -> Iterator[str]:

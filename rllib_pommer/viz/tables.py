@@ -101,17 +101,18 @@ def milestones_table(curves: list[TrainingCurve], milestones=MILESTONES) -> str:
     return "\n".join(lines)
 
 
-def phase_progress_table(curves: list[TrainingCurve], marks=PHASE_MARKS) -> str:
-    """How fast each run learned within each phase: one row per run and named phase, rows of
-    the same phase together, one column per number of games into the phase that some phase
-    reached, and the phase's end. A cell is the rolling win / loss (and kills and bombs) at the
-    phase's last row within that many of its games (the window restarts with the phase); "—"
-    where the phase did not get there. Runs that meet the same opponent at different points of
-    their lives are compared from their first game against it."""
+def phase_progress_table(curves: list[TrainingCurve], marks=PHASE_MARKS,
+                         only: tuple[str, ...] | None = None) -> str:
+    """How fast each run learned within each phase: one row per run and named phase (`only`:
+    those phases alone), rows of the same phase together, one column per number of games into
+    the phase that some phase reached, and the phase's end. A cell is the rolling win / loss
+    (and kills and bombs) at the phase's last row within that many of its games (the window
+    restarts with the phase); "—" where the phase did not get there. Runs that meet the same
+    opponent at different points of their lives are compared from their first game against it."""
     spans = []  # (stage, curve, first row, end row, episodes before the phase)
     for curve in curves:
         for start, end, stage in phases(curve.stages):
-            if stage:
+            if stage and (only is None or stage in only):
                 spans.append((stage, curve, start, end,
                               curve.episodes[start - 1] if start else 0.0))
     spans.sort(key=lambda span: (span[0], span[1].name))

@@ -13,7 +13,8 @@ import pytest
 from rllib_pommer.viz.behaviour import Heatmaps, heatmaps_by_opponent, to_top_left
 from rllib_pommer.viz.figures import FIG5_MARKS, plot_behaviour, plot_outcomes, plot_training
 from rllib_pommer.viz.matches import Match, load_outcomes, match_of
-from rllib_pommer.viz.paper import PAPER_OPPONENTS, PAPER_TABLES, paper_table
+from rllib_pommer.viz.paper import FIG3_CLAIMS, PAPER_OPPONENTS, PAPER_TABLES, paper_table
+from rllib_pommer.viz.report import _fig3_claims
 from rllib_pommer.viz.tables import milestones_table, phase_progress_table
 from rllib_pommer.viz.training import TrainingCurve
 
@@ -186,3 +187,24 @@ def test_phase_progress_counts_games_from_each_phase_start_and_groups_phases():
         "| warmup | no_curriculum | — | — | — | 0.20 / 0.70 (10,000 games) |",
         "| warmup | paper | — | — | — | 0.20 / 0.70 (10,000 games) |",
     ]
+
+
+def test_each_fig3_reading_stands_beside_the_phase_rows_that_test_it():
+    def curve(name, stages):
+        n = len(stages)
+        return TrainingCurve(name, np.arange(1, n + 1) * 1_000.0, np.zeros(n), stages,
+                             ["raw"] * n, np.linspace(0.1, 0.5, n), np.linspace(0.5, 0.1, n))
+
+    paper = curve("paper", ["value_warmup", "static", "simple_nobomb", "simple"])
+    no_shaping = curve("no_shaping", ["value_warmup", "static", "simple_nobomb", "simple_nobomb"])
+    league = curve("league", ["value_warmup", "league"])
+    section = list(_fig3_claims([paper, no_shaping, league]))
+    shaping = next(k for k, text in enumerate(section) if "Without shaping" in text)
+    rows = section[shaping + 1].splitlines()[2:]
+    assert [row.split(" | ")[:2] for row in rows] == [  # its phases of its runs, nothing else
+        ["| simple_nobomb", "no_shaping"], ["| simple_nobomb", "paper"],
+        ["| static", "no_shaping"], ["| static", "paper"]]
+    assert rows[0] == "| simple_nobomb | no_shaping | 0.37 / 0.23 | 0.50 / 0.10 (2,000 games) |"
+    cautious = next(k for k, text in enumerate(section) if "cautious agent's reward" in text)
+    assert section[cautious + 1] == "none of these runs reached these phases."
+    assert all(claim.reading in "".join(section) for claim in FIG3_CLAIMS)
