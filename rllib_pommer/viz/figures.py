@@ -41,7 +41,7 @@ def plot_training(curves: list[TrainingCurve], out: Path) -> Figure:
     if unknown:
         raise ValueError(f"Fig. 3: unknown reward kind(s) {unknown}; known: {list(REWARD_AXES)}")
     kinds = kinds or [""]
-    fig = Figure(figsize=(9, 1.2 + 3.6 * len(kinds)), layout="constrained")
+    fig = Figure(figsize=(11, 1.2 + 3.6 * len(kinds)), layout="constrained")
     axes = dict(zip(kinds, fig.subplots(len(kinds), 1, sharex=True, squeeze=False)[:, 0],
                     strict=True))
     for k, curve in enumerate(curves):
@@ -59,11 +59,16 @@ def plot_training(curves: list[TrainingCurve], out: Path) -> Figure:
         ax.set_ylabel(f"learner's return: {WINDOW:,}-episode\nmean of RLlib's "
                       f"{RLLIB_WINDOW}-episode means")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8, loc="best")
+        _legend_beside(ax)
     axes[kinds[-1]].set_xlabel("training episodes (lifetime)")
     fig.suptitle("Fig. 3: training reward per curriculum phase")
     fig.savefig(out, dpi=DPI)
     return fig
+
+
+def _legend_beside(ax) -> None:
+    """The axis's legend right of it, off the curves (a report draws a dozen runs)."""
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
 
 
 def _mark_phase(ax, episode: float, stage: str, colour: str, run: int) -> None:
@@ -87,7 +92,7 @@ def plot_outcomes(curves: list[TrainingCurve], out: Path) -> Figure:
     bombs each learner agent laid per game: a run that learns to hide lays none."""
     below = [(field, label, top) for field, label, top in OUTCOME_PANELS
              if any(np.isfinite(getattr(curve, field)).any() for curve in curves)]
-    fig = Figure(figsize=(9, 4.2 + 3.0 * len(below)), layout="constrained")
+    fig = Figure(figsize=(11, 4.2 + 3.0 * len(below)), layout="constrained")
     ax, *panels = fig.subplots(1 + len(below), 1, sharex=True, squeeze=False)[:, 0]
     for panel, (field, label, top) in zip(panels, below, strict=True):
         for k, curve in enumerate(curves):
@@ -97,7 +102,7 @@ def plot_outcomes(curves: list[TrainingCurve], out: Path) -> Figure:
         panel.set_ylabel(f"{label}\n(the same rolling means)")
         panel.set_ylim(0, top)
         panel.grid(alpha=0.3)
-        panel.legend(fontsize=8, loc="best")
+        _legend_beside(panel)
     for k, curve in enumerate(curves):
         colour = f"C{k % 10}"
         for n, (start, end, stage) in enumerate(phases(curve.stages)):
@@ -112,7 +117,7 @@ def plot_outcomes(curves: list[TrainingCurve], out: Path) -> Figure:
                   f"rates")
     (panels or [ax])[-1].set_xlabel("training episodes (lifetime)")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="best")
+    _legend_beside(ax)
     fig.suptitle("Training win and loss rates per curriculum phase (beside Fig. 3)")
     fig.savefig(out, dpi=DPI)
     return fig
