@@ -108,14 +108,14 @@ def fig3_section(training: Training, out: Path, summaries: str = "") -> Iterator
                "so runs that meet an opponent at different points of their lives compare from "
                "their first game against it.")
         yield phase_progress_table(training.curves)
-        yield from _fig3_claims(training.curves)
+        yield from fig3_readings(training.curves)
     yield training_table(training.stages)
     if summaries:
         yield (f"Each run's curve and training figures per iteration are in `{summaries}/<run>/"
                f"progress.csv` (a trial folder this report reads again).")
 
 
-def _fig3_claims(curves: list[TrainingCurve]) -> Iterator[str]:
+def fig3_readings(curves: list[TrainingCurve]) -> Iterator[str]:
     """Each reading of the paper's Fig. 3, with the phase rows of the runs here that test it."""
     yield "What the paper reads in its Fig. 3, each beside the phase rows that test it here:"
     for claim in FIG3_CLAIMS:
@@ -124,8 +124,10 @@ def _fig3_claims(curves: list[TrainingCurve]) -> Iterator[str]:
         runs = ", ".join(f"`{run}`" for run in claim.runs)
         phases = ", ".join(f"`{phase}`" for phase in claim.phases)
         yield f"*The paper:* {claim.reading} *Here*, {runs} in {phases}{note}:"
-        table = phase_progress_table(tested, only=claim.phases)
-        yield table if table.count("\n") > 1 else "none of these runs reached these phases."
+        if any(stage in claim.phases for curve in tested for stage in curve.stages):
+            yield phase_progress_table(tested, only=claim.phases)
+        else:
+            yield "none of these runs reached these phases."
 
 
 def _fig5_and_game(replays: list[Path], out: Path) -> Iterator[str]:

@@ -14,7 +14,7 @@ from rllib_pommer.viz.behaviour import Heatmaps, heatmaps_by_opponent, to_top_le
 from rllib_pommer.viz.figures import FIG5_MARKS, plot_behaviour, plot_outcomes, plot_training
 from rllib_pommer.viz.matches import Match, load_outcomes, match_of
 from rllib_pommer.viz.paper import FIG3_CLAIMS, PAPER_OPPONENTS, PAPER_TABLES, paper_table
-from rllib_pommer.viz.report import _fig3_claims
+from rllib_pommer.viz.report import fig3_readings
 from rllib_pommer.viz.tables import milestones_table, phase_progress_table
 from rllib_pommer.viz.training import TrainingCurve
 
@@ -198,7 +198,7 @@ def test_each_fig3_reading_stands_beside_the_phase_rows_that_test_it():
     paper = curve("paper", ["value_warmup", "static", "simple_nobomb", "simple"])
     no_shaping = curve("no_shaping", ["value_warmup", "static", "simple_nobomb", "simple_nobomb"])
     league = curve("league", ["value_warmup", "league"])
-    section = list(_fig3_claims([paper, no_shaping, league]))
+    section = list(fig3_readings([paper, no_shaping, league]))
     shaping = next(k for k, text in enumerate(section) if "Without shaping" in text)
     rows = section[shaping + 1].splitlines()[2:]
     assert [row.split(" | ")[:2] for row in rows] == [  # its phases of its runs, nothing else
