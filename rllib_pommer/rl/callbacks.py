@@ -22,7 +22,13 @@ In a stage marked `self_play`, the league's filled snapshot slots join the stage
 after each iteration the learner's league games (`league_games`, `league_wins`: sums over the
 iteration) go into the gate, which may fill the next slot from the learner's pi (rl/league.py);
 the new member's weights go to every env runner and the mapping takes it in at once. The result's
-`league` entry says how many snapshots play and where the gate's block stands.
+`league` entry says how many snapshots play and where the gate's block stands. Each league game
+is also counted per opponent (`league_wins_vs_<policy>`, `league_losses_vs_`, `league_games_vs_`:
+sums over the iteration); under prioritized matchmaking these go into the matchmaking book on
+the learner after each iteration (rl/league.py), the league's weights follow from it
+(rl/matchmaking.py) and reach every env runner's mapping in place, and the result's
+`matchmaking` entry gives each member's share of the coming games, estimated win rate and
+decayed games.
 
 The iteration that ends a stage asks Tune for a checkpoint (`should_checkpoint`) and names the
 stage (`curriculum/ended_stage`), so the state at every stage's end is saved (training.py keeps
@@ -46,8 +52,9 @@ from ..game.constants import Action
 from ..game.kills import deaths_by_cause, kills_of_team
 from .connectors import FILTERS_KEY, move_of
 from .curriculum import Curriculum
-from .league import gate_step, members, next_slot, read_book
+from .league import MATCHMAKING_MODULE, gate_step, members, next_slot, read_book
 from .mapping import SeatMapping
+from .matchmaking import priority
 from .rl_module import LEARNER
 
 
@@ -63,6 +70,8 @@ def _push_stage(env_runner, mapping: SeatMapping, env_settings: dict) -> None:
     if (getattr(mapping_fn, "stage", None), getattr(mapping_fn, "opponent", None)) != (
             mapping.stage, mapping.opponent):
         env_runner.config.multi_agent(policy_mapping_fn=mapping)
+    else:  # the same league: new weights, the seat cycle and the turns' order go on
+        mapping_fn.weights = mapping.weights
     if env_runner.env is not None:  # the driver's runner has no env when remote runners exist
         for env in env_runner.env.unwrapped.envs:
             env.unwrapped.set_stage(**env_settings)
@@ -133,13 +142,28 @@ class CurriculumCallback(RLlibCallback):
         league = self.curriculum.league
         return _on_learner(algorithm, lambda learner: read_book(learner, league))
 
+    def _records(self, algorithm) -> dict:
+        """The matchmaking book (rl/league.py): member -> Record."""
+        return _on_learner(algorithm, lambda learner: learner.module[MATCHMAKING_MODULE].records())
+
+    def _matched(self, stage) -> bool:
+        """Whether `stage` plays a league that meets the learner by prioritized matchmaking."""
+        league = self.curriculum.league
+        return (league is not None and league.prioritized
+                and (stage.self_play or isinstance(stage.opponent, tuple)))
+
     def apply_stage(self, algorithm, episodes: int) -> int:
         index = self.curriculum.stage_at(episodes)
         stage = self.curriculum.stages[index]
         opponent = stage.opponent
         if stage.self_play:
             opponent = (*stage.opponents, *members(self._book(algorithm)))
-        mapping = SeatMapping(index, stage.teammate, opponent)
+        weights = None
+        if self._matched(stage):
+            league, records = self.curriculum.league, self._records(algorithm)
+            weights = tuple(priority(records[name], league.priority_power, league.priority_floor)
+                            for name in opponent)
+        mapping = SeatMapping(index, stage.teammate, opponent, weights)
         env_settings = {"reward": stage.reward, "action_filter": stage.action_filter,
                         "jitter": stage.jitter}
         algorithm.env_runner_group.foreach_env_runner(
@@ -170,13 +194,39 @@ class CurriculumCallback(RLlibCallback):
         if not is_evaluation:
             self.apply_stage(algorithm, self._lifetime_episodes(algorithm))
 
+    def _match(self, algorithm, runners: dict) -> None:
+        """The iteration's results per league member into the matchmaking book."""
+        results = {}
+        for name in self.curriculum.league_members():
+            games = _count(runners, f"league_games_vs_{name}")
+            if games:
+                wins, losses = (_count(runners, f"league_{key}_vs_{name}")
+                                for key in ("wins", "losses"))
+                results[name] = (wins, losses, games - wins - losses)
+        halflife = self.curriculum.league.priority_halflife
+        algorithm.learner_group.foreach_learner(
+            lambda learner: learner.module[MATCHMAKING_MODULE].add(results, halflife))
+
+    def _matchmaking(self, algorithm, opponent: tuple[str, ...]) -> dict:
+        """Each member's share of the coming games, win-rate estimate and decayed games."""
+        league, records = self.curriculum.league, self._records(algorithm)
+        weights = [priority(records[name], league.priority_power, league.priority_floor)
+                   for name in opponent]
+        return {name: {"share": weight / sum(weights), "win_rate": records[name].win_rate,
+                       "games": records[name].games}
+                for name, weight in zip(opponent, weights)}
+
     def _gate(self, algorithm, runners: dict, episodes: int) -> dict:
-        """The iteration's league games into the gate; a filled slot goes to the env runners."""
+        """The iteration's league games into the gate; a filled slot goes to the env runners
+        (and, under prioritized matchmaking, starts a new record)."""
         league = self.curriculum.league
         wins, games = _count(runners, "league_wins"), _count(runners, "league_games")
         filled = _on_learner(
             algorithm, lambda learner: gate_step(learner, league, wins, games, episodes))
         if filled:
+            if league.prioritized:
+                algorithm.learner_group.foreach_learner(
+                    lambda learner: learner.module[MATCHMAKING_MODULE].forget(filled))
             _push_snapshots(algorithm, [filled])
         book = self._book(algorithm)
         block = next_slot(book)
@@ -188,9 +238,15 @@ class CurriculumCallback(RLlibCallback):
         runners = result[ENV_RUNNER_RESULTS]
         episodes = _count(runners, NUM_EPISODES_LIFETIME)
         before = self.curriculum.stage_at(episodes - _count(runners, NUM_EPISODES))
+        if self._matched(self.curriculum.stages[before]):
+            self._match(algorithm, runners)  # before the gate, which may restart a record
         if self.curriculum.stages[before].self_play:
             result["league"] = self._gate(algorithm, runners, episodes)
         index = self.apply_stage(algorithm, episodes)
+        stage = self.curriculum.stages[index]
+        if self._matched(stage):
+            book = members(self._book(algorithm)) if stage.self_play else ()
+            result["matchmaking"] = self._matchmaking(algorithm, (*stage.opponents, *book))
         finished = episodes >= self.curriculum.total_episodes  # the run stops after this one
         ended = self.curriculum.stages[before].name if before != index or finished else None
         if ended:
@@ -220,9 +276,13 @@ class CurriculumCallback(RLlibCallback):
             if league:  # and against each opponent of the league
                 metrics_logger.log_value(f"learner_{name}_vs_{opponent}", float(result == name),
                                          window=100)
-        if league:  # the self-play gate's count, summed over the iteration
+        if league:  # the self-play gate's and matchmaking's counts, summed over the iteration
             metrics_logger.log_value("league_games", 1, reduce="sum")
             metrics_logger.log_value("league_wins", int(result == "win"), reduce="sum")
+            metrics_logger.log_value(f"league_games_vs_{opponent}", 1, reduce="sum")
+            for key, name in (("wins", "win"), ("losses", "loss")):
+                metrics_logger.log_value(f"league_{key}_vs_{opponent}", int(result == name),
+                                         reduce="sum")
         metrics_logger.log_value("learner_return", outcome["return"], window=100)
         metrics_logger.log_value("learner_bombs", outcome["bombs"], window=100)
         for key in ("kills", "suicides", "opponent_suicides"):

@@ -119,7 +119,7 @@ def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None
     modules = {LEARNER: RLModuleSpec(module_class=PommerPPOModule, model_config=model_config)}
     modules |= {name: fixed_module_spec(name) for name in curriculum.policies()}
     if curriculum.league:  # built empty; the callback's gate fills them (league.py)
-        modules |= snapshot_specs(curriculum.league)
+        modules |= snapshot_specs(curriculum.league, curriculum.league_members())
     return (
         PPOConfig()
         .environment(env, env_config=env_config)

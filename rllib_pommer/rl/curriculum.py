@@ -25,7 +25,10 @@ beside a lone learner), and an opponent a list of policies, a league that takes 
 episodes (`opponent = ["simple", "static", "ppo_cautious"]`; rl/mapping.py says how), and
 names may carry the registry's filter suffixes (`simple_action`: SimpleAgent behind the action
 filter). A `[league]` table (`slots`, `gate_games`, `gate_win`) adds frozen self-play snapshots of
-the learner, which join the league of every stage marked `self_play = true` (rl/league.py).
+the learner, which join the league of every stage marked `self_play = true` (rl/league.py), and
+may ask for `matchmaking = "prioritized"` (with `priority_power`, `priority_floor`,
+`priority_halflife`): the league's members then meet the learner by how often it fails to beat
+them (rl/matchmaking.py) instead of in turn.
 `game = "radio"` trains in TeamRadio: the learner's action is [move, word, word] and it hears its
 teammate's words (rl/rl_module.py); scripted and Team policies in the other seats play moves,
 which send no words, so `teammate = "learner"` is how the words reach a listener that learns;
@@ -54,6 +57,7 @@ from ..agents.registry import (
 from ..game.constants import PRESETS, TEAM_PRESET, has_teams
 from ..game.rewards import REWARD_MODES
 from ..util.shipped import data_dir
+from .matchmaking import MATCHMAKING
 from .names import LEARNER
 from .settings import LeagueSettings, PPOSettings
 
@@ -147,6 +151,14 @@ class Curriculum:
                 if name not in names and name != LEARNER:
                     names.append(name)
         return names
+
+    def league_members(self) -> list[str]:
+        """Everyone the matchmaking book keeps a record against (rl/league.py): every stage's
+        opponents in first-use order, then the snapshot slots."""
+        names: list[str] = []
+        for stage in self.stages:
+            names += [name for name in stage.opponents if name not in names]
+        return names + (self.league.slot_ids() if self.league else [])
 
 
 def curriculum_dir() -> Path:
@@ -270,6 +282,9 @@ def load_curriculum(name_or_path: str | Path) -> Curriculum:
     league = data.get("league")
     if league is not None:
         _check_options(f"{where} [league]", league, LeagueSettings.options())
+        if league.get("matchmaking", "uniform") not in MATCHMAKING:
+            raise ValueError(f"{where} [league]: matchmaking {league['matchmaking']!r} is not "
+                             f"one of {list(MATCHMAKING)}")
         if data.get("game", "team") != "team":
             raise ValueError(f"{where}: a [league] (self-play snapshots) plays the Team game "
                              f"only, not game {data['game']!r}")

@@ -82,7 +82,8 @@ SUMMARY_COLUMNS = (
     "time_this_iter_s")
 # Kept too, whatever follows the prefix: a league's per-opponent outcomes and its gate's book.
 SUMMARY_PREFIXES = ("env_runners/learner_win_vs_", "env_runners/learner_loss_vs_",
-                    "env_runners/learner_tie_vs_", "env_runners/learner_kills_vs_", "league/")
+                    "env_runners/learner_tie_vs_", "env_runners/learner_kills_vs_", "league/",
+                    "matchmaking/")
 
 
 def run_name(trial: Path) -> str:

@@ -23,14 +23,18 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
 import torch
 from ray.rllib.core.columns import Columns
-from ray.rllib.core.rl_module.rl_module import RLModuleSpec
+from ray.rllib.core.rl_module.rl_module import RLModule, RLModuleSpec
 from ray.rllib.core.rl_module.torch import TorchRLModule
 
 from ..imitation.network import PommerNet
+from .matchmaking import Record
 from .names import LEARNER
 from .settings import LeagueSettings
+
+MATCHMAKING_MODULE = "matchmaking"
 
 
 @dataclass(frozen=True)
@@ -73,8 +77,47 @@ class SnapshotModule(TorchRLModule):
         self.tally.zero_()
 
 
-def snapshot_specs(settings: LeagueSettings) -> dict[str, RLModuleSpec]:
-    return {slot: RLModuleSpec(module_class=SnapshotModule) for slot in settings.slot_ids()}
+class MatchmakingModule(RLModule):
+    """The matchmaking book (module docstring): `results[i]` holds the learner's decayed wins,
+    losses and ties against member i of `model_config["members"]`. It plays no seat and has no
+    parameters (a plain RLModule, as the scripted ones: the learner builds it no optimizer);
+    its state is the array."""
+
+    def setup(self):
+        self.members = list(self.model_config["members"])
+        self.results = np.zeros((len(self.members), 3), np.float64)
+
+    def _forward(self, batch, **kwargs):
+        raise RuntimeError("the matchmaking book plays no seat")
+
+    def get_state(self, *args, **kwargs) -> dict:
+        return {"results": self.results.copy()}
+
+    def set_state(self, state: dict) -> None:
+        self.results = np.array(state["results"], np.float64)
+
+    def records(self) -> dict[str, Record]:
+        return {name: Record(*(float(n) for n in row))
+                for name, row in zip(self.members, self.results)}
+
+    def add(self, results: dict[str, tuple[int, int, int]], halflife: float) -> None:
+        """Count each member's new (wins, losses, ties) into its record."""
+        records = self.records()
+        for name, (wins, losses, ties) in results.items():
+            record = records[name].add(wins, losses, ties, halflife)
+            self.results[self.members.index(name)] = (record.wins, record.losses, record.ties)
+
+    def forget(self, name: str) -> None:
+        self.results[self.members.index(name)] = 0.0
+
+
+def snapshot_specs(settings: LeagueSettings, members: list[str]) -> dict[str, RLModuleSpec]:
+    """The slots' modules, and the matchmaking book's under prioritized matchmaking."""
+    specs = {slot: RLModuleSpec(module_class=SnapshotModule) for slot in settings.slot_ids()}
+    if settings.prioritized:
+        specs[MATCHMAKING_MODULE] = RLModuleSpec(module_class=MatchmakingModule,
+                                                 model_config={"members": list(members)})
+    return specs
 
 
 def read_book(learner, settings: LeagueSettings) -> list[Slot]:

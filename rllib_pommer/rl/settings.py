@@ -70,11 +70,23 @@ class PPOSettings(TableSettings):
 
 @dataclass(frozen=True)
 class LeagueSettings(TableSettings):
-    """Self-play snapshot slots and the gate that fills them (rl/league.py)."""
+    """Self-play snapshot slots and the gate that fills them (rl/league.py), and how the
+    league's members are matched with the learner (rl/matchmaking.py)."""
 
     slots: int = _option(4, high=16)  # frozen modules snapshot_0 .. snapshot_{slots - 1}
     gate_games: int = _option(400)  # league games per block of the gate
     gate_win: float = _option(0.7, low=0, high=1)  # a block's win rate that adds a snapshot
+    # "uniform": members take turns in order; "prioritized": by how often the learner fails
+    # to beat each, max(floor, (1 - win rate) ** power), records halving every `halflife`
+    # games against the member.
+    matchmaking: str = _option("uniform")
+    priority_power: float = _option(2.0, low=0)
+    priority_floor: float = _option(0.1, low=0, high=1)
+    priority_halflife: int = _option(100)
+
+    @property
+    def prioritized(self) -> bool:
+        return self.matchmaking == "prioritized"
 
     def slot_ids(self) -> list[str]:
         return [f"snapshot_{i}" for i in range(self.slots)]
