@@ -1,10 +1,12 @@
-"""A self-play league survives the command line's whole round trip: `train --stop`, `--pack`, a
-move to another folder (as a fresh clone holds a committed run) and `--resume` from another
-working directory. The league's state is its snapshot modules' (`born` and `tally` beside pi,
-rl/league.py), so the test follows them from the packed checkpoint to the resumed one: the
-filled slot keeps its birth and weights, the gate's block counts on from where the packed
-checkpoint left it (a block spans many iterations here, so a reset would show), and the
-snapshot is a member, and plays, from the first resumed iteration."""
+"""A self-play league under prioritized matchmaking survives the command line's whole round trip:
+`train --stop`, `--pack`, a move to another folder (as a fresh clone holds a committed run) and
+`--resume` from another working directory. The league's state is its snapshot modules' (`born`
+and `tally` beside pi) and the matchmaking book's (rl/league.py), so the test follows them from
+the packed checkpoint to the resumed one: the filled slot keeps its birth and weights, the gate's
+block counts on from where the packed checkpoint left it (a block spans many iterations here, so
+a reset would show), the snapshot is a member, and plays, from the first resumed iteration, and
+each member's record goes on from the packed one, iteration by iteration (a fresh book would
+show: the records fade slowly here)."""
 
 from __future__ import annotations
 
@@ -12,6 +14,7 @@ import shutil
 import subprocess
 import sys
 
+import pytest
 import torch
 
 from rllib_pommer.rl.checkpoint_policy import (
@@ -22,7 +25,8 @@ from rllib_pommer.rl.checkpoint_policy import (
     read_module_state,
 )
 from rllib_pommer.rl.curriculum import load_curriculum
-from rllib_pommer.rl.league import Slot, members, next_slot
+from rllib_pommer.rl.league import MATCHMAKING_MODULE, Slot, members, next_slot
+from rllib_pommer.rl.matchmaking import Record
 
 from .test_resume import REPO, _interrupt, _results, _train, _wait_for
 from .test_self_play import SELF_PLAY_SMOKE
@@ -34,7 +38,20 @@ GATE_GAMES = 1000
 LEAGUE_RESUME = (("num_envs_per_env_runner = 4\n",
                   "num_envs_per_env_runner = 4\ncheckpoint_every = 1\n"),
                  ("gate_games = 4\n", f"gate_games = {GATE_GAMES}\n"),
-                 ('opponent = ["suicide", "static_action"]', 'opponent = ["suicide"]'))
+                 ('opponent = ["suicide", "static_action"]', 'opponent = ["suicide"]'),
+                 ("gate_win = 0.5\n", 'gate_win = 0.5\nmatchmaking = "prioritized"\n'
+                                      "priority_halflife = 5000\n"))
+
+
+def _records(checkpoint, members_: list[str]) -> dict[str, Record]:
+    """The matchmaking book as a checkpoint's learner holds it."""
+    state = read_module_state(checkpoint / MODULES_DIR / MATCHMAKING_MODULE / "module_state.pkl")
+    return {name: Record(*(float(n) for n in row)) for name, row in zip(members_,
+                                                                         state["results"])}
+
+
+def _reported(row: dict) -> dict[str, float]:
+    return {name: entry["games"] for name, entry in row["matchmaking"].items()}
 
 
 def _book(checkpoint, slot_ids) -> list[Slot]:
@@ -57,6 +74,11 @@ def _filled_checkpoint(run, slot_ids) -> bool:
     return False
 
 
+def _count(row: dict, key: str) -> int:
+    value = row["env_runners"].get(key, 0)
+    return 0 if value != value else int(value)  # NaN: none this iteration
+
+
 def _command(out, *extra):
     return [sys.executable, "-m", "rllib_pommer.train", "--out", str(out), *extra]
 
@@ -69,6 +91,8 @@ def test_a_league_survives_stop_pack_move_and_resume(tmp_path, pi_weights):
     curriculum = tmp_path / "league_resume.toml"
     curriculum.write_text(text)
     slot_ids = load_curriculum(curriculum).league.slot_ids()
+    league_members = load_curriculum(curriculum).league_members()
+    halflife = load_curriculum(curriculum).league.priority_halflife
     started_from = tmp_path / "first" / "weights" / "pi.pt"  # removed with the old place
     started_from.parent.mkdir(parents=True)
     shutil.copy(pi_weights, started_from)
@@ -104,6 +128,10 @@ def test_a_league_survives_stop_pack_move_and_resume(tmp_path, pi_weights):
     assert block.module_id == "snapshot_1" and not book[1].filled
     assert 0 < block.games == at_checkpoint["league"]["gate_games"] < GATE_GAMES
     assert at_checkpoint["league"]["members"] == list(members(book)) == ["snapshot_0"]
+    records = _records(checkpoint, league_members)  # the book the first run reported last
+    assert {name: records[name].games for name in _reported(at_checkpoint)} == pytest.approx(
+        _reported(at_checkpoint))
+    assert records["snapshot_0"].games > 0 and records["suicide"].games > 0
 
     moved = tmp_path / "clone" / "campaign" / "run"
     shutil.copytree(first, moved)
@@ -136,6 +164,13 @@ def test_a_league_survives_stop_pack_move_and_resume(tmp_path, pi_weights):
         assert games < GATE_GAMES, "the block ended after the resume: raise GATE_GAMES"
         assert row["league"]["gate_games"] == games, (row["training_iteration"], block)
         tally_at[row["training_iteration"]] = (wins, games)
+        new = {}  # the book counts on: each member's record plus this iteration's games
+        for name in ("suicide", "snapshot_0"):
+            played, won, lost = (_count(row, f"league_{key}_vs_{name}")
+                                 for key in ("games", "wins", "losses"))
+            new[name] = records[name].add(won, lost, played - won - lost, halflife)
+        records = {**records, **new}
+        assert _reported(row) == pytest.approx({name: records[name].games for name in new})
     newest = max((c for c in trial.glob("checkpoint_*") if checkpoint_complete(c)),
                  key=checkpoint_iteration)
     assert checkpoint_iteration(newest) > iteration
