@@ -214,7 +214,7 @@ class CurriculumCallback(RLlibCallback):
                    for name in opponent]
         return {name: {"share": weight / sum(weights), "win_rate": records[name].win_rate,
                        "games": records[name].games}
-                for name, weight in zip(opponent, weights)}
+                for name, weight in zip(opponent, weights, strict=True)}
 
     def _gate(self, algorithm, runners: dict, episodes: int) -> dict:
         """The iteration's league games into the gate; a filled slot goes to the env runners

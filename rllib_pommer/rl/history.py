@@ -50,7 +50,17 @@ from pathlib import Path
 
 import numpy as np
 
-from ..viz.training import WINDOW, StageFigures, Training, TrainingCurve, phases
+from ..viz.training import (
+    MEMBER_WINDOW,
+    OUTCOME_KEYS,
+    WINDOW,
+    LeagueCurves,
+    MemberCurves,
+    StageFigures,
+    Training,
+    TrainingCurve,
+    phases,
+)
 
 RETURN_COLUMNS = ("env_runners/module_episode_returns_mean/learner",
                   "env_runners/episode_return_mean", "episode_reward_mean")
@@ -83,7 +93,7 @@ SUMMARY_COLUMNS = (
 # Kept too, whatever follows the prefix: a league's per-opponent outcomes and its gate's book.
 SUMMARY_PREFIXES = ("env_runners/learner_win_vs_", "env_runners/learner_loss_vs_",
                     "env_runners/learner_tie_vs_", "env_runners/learner_kills_vs_", "league/",
-                    "matchmaking/")
+                    "env_runners/league_games_vs_", "matchmaking/")
 
 
 def run_name(trial: Path) -> str:
@@ -298,6 +308,35 @@ def training_curve(trial: Trial | Path, window: int = WINDOW) -> TrainingCurve:
                          curve(_values(kept, "env_runners/learner_bombs")))
 
 
+MEMBER_PREFIX = "env_runners/learner_win_vs_"
+
+
+def league_curves(trial: Trial | Path, window: int = MEMBER_WINDOW) -> LeagueCurves | None:
+    """The learner's outcomes against each league member and the members' shares
+    (viz/training.MemberCurves), or None for a trial that played no league. A row's outcome
+    rates against a member are those of its iteration's games against it, weighted by their
+    number (`league_games_vs_<member>`; runs that did not log it count one game a row)."""
+    trial = read_trial(trial)
+    rows = trial.rows
+    names = list(dict.fromkeys(key.removeprefix(MEMBER_PREFIX) for row in rows for key in row
+                               if key.startswith(MEMBER_PREFIX)))
+    if not names:
+        return None
+    episodes = np.cumsum(_episode_counts(trial))
+    members = {}
+    for name in names:
+        rates = {key: _values(rows, f"env_runners/learner_{key}_vs_{name}")
+                 for key in OUTCOME_KEYS}
+        played = np.isfinite(rates["win"])
+        games = np.nan_to_num(_values(rows, f"env_runners/league_games_vs_{name}"))
+        games = np.where(played, np.where(games > 0, games, 1), 0).astype(np.int64)
+        curves = {key: rolling_mean(np.nan_to_num(values), games, window)
+                  for key, values in rates.items()}
+        members[name] = MemberCurves(**curves,
+                                     share=_values(rows, f"matchmaking/{name}/share"))
+    return LeagueCurves(trial.name, episodes, members)
+
+
 def _phase_means(values: np.ndarray, counts: np.ndarray, stages: list[str],
                  window: int) -> np.ndarray:
     """`rolling_mean` restarted at each phase; a row without a value weighs nothing."""
@@ -361,8 +400,10 @@ def run_training(paths: list[Path], summaries: Path | None = None) -> Training:
     for k, trial in enumerate(read if summaries else ()):
         write_summary(trial, summaries / (trial.name if named[trial.name] == 1
                                           else f"{trial.name}_{k}"))
+    leagues = [league_curves(trial) for trial in read]
     return Training(trials, [training_curve(trial) for trial in read],
-                    [f for trial in read for f in stage_figures(trial)])
+                    [f for trial in read for f in stage_figures(trial)],
+                    [league for league in leagues if league is not None])
 
 
 def read_source(policy_dir: Path) -> dict:

@@ -98,7 +98,7 @@ class MatchmakingModule(RLModule):
 
     def records(self) -> dict[str, Record]:
         return {name: Record(*(float(n) for n in row))
-                for name, row in zip(self.members, self.results)}
+                for name, row in zip(self.members, self.results, strict=True)}
 
     def add(self, results: dict[str, tuple[int, int, int]], halflife: float) -> None:
         """Count each member's new (wins, losses, ties) into its record."""

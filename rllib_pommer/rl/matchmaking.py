@@ -78,7 +78,7 @@ class WeightedTurns:
         """The index of the member that plays the next turn."""
         if len(weights) != len(self.credit):
             self.credit = [0.0] * len(weights)  # the league changed: start even
-        self.credit = [credit + weight for credit, weight in zip(self.credit, weights)]
+        self.credit = [credit + weight for credit, weight in zip(self.credit, weights, strict=True)]
         chosen = max(range(len(weights)), key=self.credit.__getitem__)
         self.credit[chosen] -= sum(weights)
         return chosen

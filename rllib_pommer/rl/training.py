@@ -123,7 +123,8 @@ class Progress(FreshOnRestore):
     """One line per iteration: stage, episodes, win/loss/tie, env steps/s and the time left in the
     stage and in the run, both at the games/s seen since the first result. The run's figure is a
     floor early on, since a curriculum's later games may last longer (the paper campaign's are
-    measured in docs/measurements.md), so the line says whose pace it assumes. An iteration
+    measured in docs/measurements.md), so the line says whose pace it assumes. Under prioritized
+    matchmaking it names the league member the learner will meet most. An iteration
     whose learner skipped updates for non-finite gradients (learner.py) says how many."""
 
     def __init__(self):
@@ -147,8 +148,18 @@ class Progress(FreshOnRestore):
               f"{runners.get('learner_tie', 0):.2f}  return {runners.get('learner_return', 0):+.2f}"
               f"{_kills(runners)}"
               f"  {steps_per_s:.0f} env steps/s  ETA stage {_eta(stage_end - episodes, rate)}, "
-              f"run {_eta(total - episodes, rate)} at this stage's pace{_skipped(result)}",
-              flush=True)
+              f"run {_eta(total - episodes, rate)} at this stage's pace{_hardest(result)}"
+              f"{_skipped(result)}", flush=True)
+
+
+def _hardest(result: dict) -> str:
+    """Under prioritized matchmaking, the member that gets the largest share of the coming
+    games, with the learner's win-rate estimate against it (rl/matchmaking.py)."""
+    shares = result.get("matchmaking")
+    if not shares:
+        return ""
+    name, entry = max(shares.items(), key=lambda item: item[1]["share"])
+    return f"  most played next: {name} {entry['share']:.2f} (won {entry['win_rate']:.2f})"
 
 
 def _kills(runners: dict) -> str:

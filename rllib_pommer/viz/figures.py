@@ -17,7 +17,7 @@ from matplotlib.patches import Patch
 from .behaviour import Heatmaps
 from .matches import VARIANTS
 from .paper import PAPER_OPPONENTS
-from .training import RLLIB_WINDOW, WINDOW, TrainingCurve, phases
+from .training import MEMBER_WINDOW, RLLIB_WINDOW, WINDOW, LeagueCurves, TrainingCurve, phases
 
 DPI = 120
 # (name, index in a (win, loss, tie) cell, colour), in the order the bars are drawn.
@@ -62,6 +62,43 @@ def plot_training(curves: list[TrainingCurve], out: Path) -> Figure:
         _legend_beside(ax)
     axes[kinds[-1]].set_xlabel("training episodes (lifetime)")
     fig.suptitle("Fig. 3: training reward per curriculum phase")
+    fig.savefig(out, dpi=DPI)
+    return fig
+
+
+def plot_league(league: LeagueCurves, out: Path) -> Figure:
+    """A league run member by member: the learner's win, tie and loss rates against each
+    (over its last `MEMBER_WINDOW` games against it) and, under prioritized matchmaking, the
+    member's share of the coming games on a second axis."""
+    names = list(league.members)
+    columns = min(4, len(names))
+    rows = math.ceil(len(names) / columns)
+    fig = Figure(figsize=(3.4 * columns, 1.2 + 2.4 * rows), layout="constrained")
+    axes = fig.subplots(rows, columns, sharex=True, sharey=True, squeeze=False).ravel()
+    for ax, name in zip(axes, names, strict=False):  # spare axes hidden below
+        member = league.members[name]
+        for outcome, _, colour in OUTCOMES:
+            ax.plot(league.episodes, getattr(member, outcome), color=colour, label=outcome)
+        if np.isfinite(member.share).any():
+            share = ax.twinx()
+            share.plot(league.episodes, member.share, color="black", linestyle=":",
+                       label="share of games")
+            share.set_ylim(0, max(0.3, float(np.nanmax(member.share)) * 1.1))
+            share.tick_params(labelsize=7)
+        ax.set_title(name, fontsize=9)
+        ax.set_ylim(0, 1)
+        ax.grid(alpha=0.3)
+    for ax in axes[len(names):]:
+        ax.set_visible(False)
+    for ax in axes[len(names) - columns:len(names)]:
+        ax.set_xlabel("training episodes (lifetime)", fontsize=8)
+    handles = [Line2D([], [], color=colour, label=outcome) for outcome, _, colour in OUTCOMES]
+    if any(np.isfinite(member.share).any() for member in league.members.values()):
+        handles.append(Line2D([], [], color="black", linestyle=":",
+                              label="share of the coming games (right axis)"))
+    fig.legend(handles=handles, loc="outside lower center", ncols=len(handles), fontsize=8)
+    fig.suptitle(f"{league.name}: the learner against each league member (its last "
+                 f"{MEMBER_WINDOW} games against it)")
     fig.savefig(out, dpi=DPI)
     return fig
 

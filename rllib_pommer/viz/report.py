@@ -18,6 +18,7 @@ from .figures import (
     comparable_opponents,
     plot_behaviour,
     plot_filter_effects,
+    plot_league,
     plot_outcomes,
     plot_training,
 )
@@ -27,7 +28,7 @@ from .matches import ROW_KEYS, load_outcomes, rates_by_opponent
 from .paper import FIG3_CLAIMS, paper_table
 from .render import render_game
 from .tables import milestones_table, phase_progress_table, results_table, training_table
-from .training import RLLIB_WINDOW, WINDOW, Training, TrainingCurve
+from .training import MEMBER_WINDOW, RLLIB_WINDOW, WINDOW, Training, TrainingCurve
 from .viewer import write_viewer
 
 UNSAFE_IN_NAMES = re.compile(r"[^\w.-]+")
@@ -110,9 +111,25 @@ def fig3_section(training: Training, out: Path, summaries: str = "") -> Iterator
         yield phase_progress_table(training.curves)
         yield from fig3_readings(training.curves)
     yield training_table(training.stages)
+    yield from league_section(training, out)
     if summaries:
         yield (f"Each run's curve and training figures per iteration are in `{summaries}/<run>/"
                f"progress.csv` (a trial folder this report reads again).")
+
+
+def league_section(training: Training, out: Path) -> Iterator[str]:
+    """Each league run's outcomes against each member (and their shares under prioritized
+    matchmaking), one PNG a run."""
+    if not training.leagues:
+        return
+    yield "## The learner against each league member"
+    yield (f"Win, tie and loss rates of the learner's team against each member over its last "
+           f"{MEMBER_WINDOW} games against it; under prioritized matchmaking, the dotted line "
+           f"is the member's share of the coming games (right axis).")
+    for k, league in enumerate(training.leagues):
+        name = f"league_{k}_{league.name}.png"
+        plot_league(league, out / name)
+        yield f"![{league.name} against each league member]({name})"
 
 
 def fig3_readings(curves: list[TrainingCurve]) -> Iterator[str]:

@@ -9,6 +9,7 @@ at each curriculum phase; each iteration logs RLlib's mean over its last `RLLIB_
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -16,6 +17,8 @@ import numpy as np
 
 WINDOW = 1000
 RLLIB_WINDOW = 100
+MEMBER_WINDOW = 200  # games against one league member that its curves average
+OUTCOME_KEYS = ("win", "loss", "tie")
 
 
 @dataclass
@@ -59,13 +62,36 @@ class StageFigures:
 
 
 @dataclass
+class MemberCurves:
+    """The learner against one league member, per kept row of its run: the win, loss and tie
+    rates over its last `MEMBER_WINDOW` games against the member (NaN before the first), and
+    the member's share of the coming games under prioritized matchmaking (NaN: uniform)."""
+
+    win: np.ndarray
+    loss: np.ndarray
+    tie: np.ndarray
+    share: np.ndarray
+
+
+@dataclass
+class LeagueCurves:
+    """One league run, member by member, over its lifetime episodes."""
+
+    name: str
+    episodes: np.ndarray
+    members: dict[str, MemberCurves]
+
+
+@dataclass
 class Training:
     """The training of some trials, as the figures draw it: the trial folders it was read from,
-    one curve per trial and the figures of every phase of every trial."""
+    one curve per trial, the figures of every phase of every trial, and the member curves of
+    the trials that played a league."""
 
     trials: list[Path]
     curves: list[TrainingCurve]
     stages: list[StageFigures]
+    leagues: list[LeagueCurves] = dataclasses.field(default_factory=list)
 
 
 def phases(stages: list[str]) -> list[tuple[int, int, str]]:

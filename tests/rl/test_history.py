@@ -9,13 +9,14 @@ import numpy as np
 import pytest
 
 from rllib_pommer.rl.history import (
+    league_curves,
     read_rows,
     rolling_mean,
     stage_figures,
     training_curve,
     write_summary,
 )
-from rllib_pommer.viz.figures import plot_outcomes
+from rllib_pommer.viz.figures import plot_league, plot_outcomes
 from rllib_pommer.viz.tables import training_table
 
 
@@ -255,3 +256,34 @@ def test_each_rows_reward_kind_comes_from_the_log_or_else_the_trials_params(tmp_
     assert training_curve(old).rewards == ["raw", "raw"]
     assert training_curve(new).rewards == ["shaped", "raw"]  # the log wins
     assert training_curve(write_summary(old, tmp_path / "summary")).rewards == ["raw", "raw"]
+
+
+def test_league_curves_weight_each_members_rows_by_its_games_and_carry_shares(tmp_path):
+    """Per member: outcome rates over its last games (a row weighted by its games against the
+    member; a row without any weighs nothing), shares where matchmaking logged them; drawn
+    one panel a member."""
+    columns = ("env_runners/episode_return_mean,env_runners/num_episodes_lifetime,"
+               "env_runners/learner_win_vs_ppo,env_runners/learner_loss_vs_ppo,"
+               "env_runners/learner_tie_vs_ppo,env_runners/league_games_vs_ppo,"
+               "env_runners/learner_win_vs_static,env_runners/learner_loss_vs_static,"
+               "env_runners/learner_tie_vs_static,env_runners/league_games_vs_static,"
+               "matchmaking/ppo/share,matchmaking/static/share\n")
+    trial = _trial_with_progress(tmp_path, columns +
+                                 "0.0,10,0.0,0.0,1.0,3,1.0,0.0,0.0,1,0.5,0.5\n"
+                                 "0.0,20,1.0,0.0,0.0,1,,,,,0.8,0.2\n"
+                                 "0.0,30,,,,,0.0,1.0,0.0,3,0.75,0.25\n")
+    league = league_curves(trial, window=4)
+    np.testing.assert_array_equal(league.episodes, [10, 20, 30])
+    assert list(league.members) == ["ppo", "static"]
+    ppo, static = league.members["ppo"], league.members["static"]
+    np.testing.assert_allclose(ppo.tie, [1.0, 0.75, 0.75])  # 3 ties, then 1 win: 3 of 4
+    np.testing.assert_allclose(ppo.win, [0.0, 0.25, 0.25])
+    np.testing.assert_allclose(static.loss, [0.0, 0.0, 0.75])  # the last 4 games: 3 losses
+    np.testing.assert_allclose(ppo.share, [0.5, 0.8, 0.75])
+    (tmp_path / "plain").mkdir()
+    plain = _trial_with_progress(tmp_path / "plain", "env_runners/episode_return_mean,"
+                                 "env_runners/num_episodes_lifetime\n0.0,10\n")
+    assert league_curves(plain) is None  # no league played
+    figure = plot_league(league, tmp_path / "league.png")
+    assert (tmp_path / "league.png").stat().st_size > 10_000
+    assert [ax.get_title() for ax in figure.axes[:2]] == ["ppo", "static"]

@@ -46,8 +46,8 @@ LEAGUE_RESUME = (("num_envs_per_env_runner = 4\n",
 def _records(checkpoint, members_: list[str]) -> dict[str, Record]:
     """The matchmaking book as a checkpoint's learner holds it."""
     state = read_module_state(checkpoint / MODULES_DIR / MATCHMAKING_MODULE / "module_state.pkl")
-    return {name: Record(*(float(n) for n in row)) for name, row in zip(members_,
-                                                                         state["results"])}
+    return {name: Record(*(float(n) for n in row))
+            for name, row in zip(members_, state["results"], strict=True)}
 
 
 def _reported(row: dict) -> dict[str, float]:
