@@ -8,8 +8,9 @@ same observations and rewards, and only the RLlib one pays for importing Ray.
 An agent that dies gets its last observation and its final reward, then leaves; the game ends for
 everyone when the engine says so (a team wiped out, or the step limit, a tie). `reward_mode`
 (`game/rewards.py`: "shaped", the paper's; "raw", the engine's; "shaped_credit" and "raw_kills",
-which pay only the kills credited to the agent's team) decides the reward at an agent's last step
-and, for "raw_kills", on the steps its team kills.
+which pay only the kills credited to the agent's team; "raw_kills_clock", which also charges the
+clock) decides the reward at an agent's last step and, for "raw_kills", on the steps its team
+kills (and for "raw_kills_clock" on every step).
 
 The final infos carry `winners` (seats, empty on a tie), `died` and `killers` (every seat's
 kill-credit mask, `game/kills.py`), so callbacks can log the true outcome and who killed whom
@@ -53,7 +54,7 @@ from ..game.constants import (
 from ..game.engine import RADIO_ACTION_SIZE, Game
 from ..game.observation import Observation
 from ..game.raw_codec import RAW_SIZE, pack_raw
-from ..game.rewards import check_reward_mode, final_reward, kill_reward
+from ..game.rewards import check_reward_mode, clock_reward, final_reward, kill_reward
 from ..imitation.features import NUM_PLANES, featurize, message_features
 from ..viz.frames import state_frame
 from ..viz.render import draw_frame
@@ -220,6 +221,8 @@ class MultiAgentTeam:
         self.last_observation = obs
         alive = self.game.batch.alive[0]
         killers = self.game.batch.killers[0].tolist()
+        step, max_steps = int(obs.step_count.max()), self.game.config.max_steps
+        winners = info.get("winners", []) if done else []
         all_obs = self._observations(obs)
         acting, self.agents = self.agents, []
         newly_dead = [agent for agent in acting if not alive[agent]]
@@ -231,7 +234,8 @@ class MultiAgentTeam:
             terminateds[agent] = leaves
             rewards[agent] = kill_reward(self.reward_mode, agent, newly_dead, killers) + (
                 final_reward(self.reward_mode, agent, done, info, engine_rewards[agent], alive,
-                             killers) if leaves else 0.0)
+                             killers) if leaves else 0.0) + clock_reward(
+                self.reward_mode, step, max_steps, leaves, agent in winners)
             if done:
                 infos[agent].update(winners=info.get("winners", []), killers=killers,
                                     died=(~alive).tolist())

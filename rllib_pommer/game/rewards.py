@@ -10,10 +10,17 @@ An agent's last step is its death or the game's end. There `mode` decides its fi
   agent that died before (it cannot see the outcome any more);
 * "raw_kills" (ours): "raw", plus KILL_BONUS for every enemy the agent's team kills, paid on the
   step the enemy dies to each agent of the team still playing then (the killer included if it
-  dies in the same blast), so a kill is paid when it happens and a suicide never.
+  dies in the same blast), so a kill is paid when it happens and a suicide never;
+* "raw_kills_clock" (ours): "raw_kills", plus a clock: every step an agent plays costs
+  CLOCK_COST / max_steps, and an agent whose last step is not its team's win also pays the rest
+  of the clock to the step limit. A tie or a loss so costs CLOCK_COST more than "raw_kills"
+  pays for them, whenever it comes (dying early saves nothing), while a win keeps what was
+  left of the clock: a win at step t is worth CLOCK_COST * (1 - t / max_steps) more than a tie,
+  so a team that waits for the careful opponents to err is paid less than one that wins early.
 
-Every other step pays nothing. Written here, below every env and the curriculum checker, so that
-each reads the same modes without importing the other.
+Every other step pays nothing (but the clock's share, in "raw_kills_clock"). Written here,
+below every env and the curriculum checker, so that each reads the same modes without importing
+the other.
 """
 
 from __future__ import annotations
@@ -25,8 +32,11 @@ import numpy as np
 from .constants import NUM_AGENTS, Result
 from .kills import death_cause
 
-REWARD_MODES = ("shaped", "raw", "shaped_credit", "raw_kills")
+REWARD_MODES = ("shaped", "raw", "shaped_credit", "raw_kills", "raw_kills_clock")
 KILL_BONUS = 0.5
+CLOCK_COST = 0.5  # what the whole clock costs in "raw_kills_clock"
+_RAW = ("raw", "raw_kills", "raw_kills_clock")  # the engine's outcome at the last step
+_KILLS = ("raw_kills", "raw_kills_clock")  # paid for credited kills
 
 
 def check_reward_mode(mode: str) -> str:
@@ -45,7 +55,7 @@ def final_reward(mode: str, agent: int, done: bool, info: dict, engine_reward: f
     """`agent`'s reward at its last step: the game's end (`done`, with the engine's `info` and
     `engine_reward`) or its death; `alive` is every seat's after the step, `killers` their
     kill-credit masks (engine.Games.killers)."""
-    if mode in ("raw", "raw_kills"):
+    if mode in _RAW:
         return float(engine_reward) if done else -1.0
     if done and info["result"] == Result.WIN and agent in info["winners"]:
         return 1.0
@@ -58,7 +68,16 @@ def final_reward(mode: str, agent: int, done: bool, info: dict, engine_reward: f
 def kill_reward(mode: str, agent: int, newly_dead: Sequence[int], killers: Sequence[int]) -> float:
     """What `agent` is paid on a step for the enemies its team killed in it (`newly_dead`: the
     seats that died in the step)."""
-    if mode != "raw_kills":
+    if mode not in _KILLS:
         return 0.0
     return KILL_BONUS * sum(1 for e in newly_dead
                             if e % 2 != agent % 2 and _killed_by_enemies(e, killers))
+
+
+def clock_reward(mode: str, step: int, max_steps: int, last: bool, won: bool) -> float:
+    """What an agent pays to the clock on the game's `step` (counted from 1) that it plays: its
+    share, and at its `last` step, unless its team `won`, the rest of the clock."""
+    if mode != "raw_kills_clock":
+        return 0.0
+    steps = 1 + (max_steps - step if last and not won else 0)
+    return -CLOCK_COST * steps / max_steps

@@ -30,6 +30,7 @@ Rates = dict[str, dict[str, tuple[float, float, float]]]  # opponent -> variant 
 REWARD_AXES = {"shaped": "shaped reward (the paper's)", "raw": "raw reward (the engine's)",
                "shaped_credit": "shaped reward, credited kills only (ours)",
                "raw_kills": "raw reward + 0.5 a credited kill (ours)",
+               "raw_kills_clock": "raw reward + 0.5 a credited kill - the clock (ours)",
                "": "reward kind not logged"}
 
 
