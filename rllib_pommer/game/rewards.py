@@ -15,8 +15,9 @@ An agent's last step is its death or the game's end. There `mode` decides its fi
   CLOCK_COST / max_steps, and an agent whose last step is not its team's win also pays the rest
   of the clock to the step limit. A tie or a loss so costs CLOCK_COST more than "raw_kills"
   pays for them, whenever it comes (dying early saves nothing), while a win keeps what was
-  left of the clock: a win at step t is worth CLOCK_COST * (1 - t / max_steps) more than a tie,
-  so a team that waits for the careful opponents to err is paid less than one that wins early.
+  left of the clock: a win at step t pays CLOCK_COST * (1 - t / max_steps) more than a win at
+  the step limit, so a team that waits for the careful opponents to err earns less than one
+  that wins early.
 
 Every other step pays nothing (but the clock's share, in "raw_kills_clock"). Written here,
 below every env and the curriculum checker, so that each reads the same modes without importing
