@@ -11,8 +11,9 @@ run directory (default runs/<curriculum name>) gets RLlib checkpoints and Tensor
 noted when it started (another one is refused). The arena plays a run's learner
 by its directory: `python -m rllib_pommer.evaluate --team runs/quick --vs static`.
 
-`--stop` stops the run training in RUN_DIR (started by another command) right after its next
-checkpoint, as Ctrl-C would but without losing the iterations since the last one. `--pack`
+`--stop` stops the run training in RUN_DIR (started by another command) after the iteration
+under way, checkpointed, as Ctrl-C would but without losing the iterations since the last
+checkpoint, and says the iteration it stopped at. `--pack`
 shrinks a stopped run to what resuming needs (newest checkpoint, stage checkpoints, a
 small history.csv of the results), so it can be committed or copied and continued with
 `--resume` on another machine, at another path. `--export` ships a run's learner as a policy
@@ -53,8 +54,8 @@ def main(argv: list[str] | None = None) -> int:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     add_options(parser, RunSettings, HELP)
     parser.add_argument("--stop", action="store_true",
-                        help="stop the run training in --out right after its next checkpoint "
-                             "(then pack it, with --pack), then exit")
+                        help="stop the run training in --out after the iteration under way, "
+                             "checkpointed (then pack it, with --pack), then exit")
     parser.add_argument("--pack", action="store_true",
                         help="shrink the stopped run in --out for another machine, then exit")
     parser.add_argument("--export", type=Path, metavar="POLICY_DIR",
@@ -104,10 +105,10 @@ def main(argv: list[str] | None = None) -> int:
 def _stop(parser: argparse.ArgumentParser, out: Path | None) -> int:
     if out is None:
         parser.error("--stop needs --out RUN_DIR")
-    from .rl.packing import stop_at_next_checkpoint
+    from .rl.packing import stop_run
 
     try:
-        stop_at_next_checkpoint(out)
+        stop_run(out)
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

@@ -6,7 +6,8 @@ Tune resumes from (`tune_state`) and drops Tune's growing logs (progress.csv dow
 so the folder (a few MB plus the stage checkpoints) can be committed, copied to a fresh clone
 anywhere and resumed there with `train --resume` (`training.py`): Tune restores a moved
 experiment, and every path the run needs is rebuilt from the curriculum on the new machine.
-`stop_at_next_checkpoint` stops a run training in another process so that it loses no iteration.
+`stop_run` stops a run training in another process with every iteration it finished in a
+checkpoint: it asks the run's driver through a file in the run folder (`STOP_REQUEST`).
 """
 
 from __future__ import annotations
@@ -31,39 +32,79 @@ from .checkpoint_policy import (
 from .history import HISTORY_FILE, Trial, number, read_trial, write_summary
 from .tune_state import STATE_PATTERNS
 
+STOP_REQUEST = "stop_request"  # in the run folder: `stop_run` asks the driver to stop
 
-def stop_at_next_checkpoint(out: Path, say=print, poll: float = 2.0, settle: float = 5.0,
-                            timeout: float = 600.0) -> Path:
-    """Stop the run training in `out` right after its next whole checkpoint, as Ctrl-C would
-    (SIGINT to its driver), and wait for it to exit: a run stopped so loses no iteration. The
-    `settle` seconds give Tune time to register the checkpoint (`pack_run` corrects its state
-    if it had not). Returns that checkpoint; ValueError if no run is going in `out`, or it ended
-    before a checkpoint."""
+
+def stop_run(out: Path, say=print, poll: float = 0.5, timeout: float = 600.0) -> Path:
+    """Stop the run training in `out` with every iteration it finished in a checkpoint, wait for
+    it to exit and say where it stopped. The request (`STOP_REQUEST`) is taken by the driver's
+    Tune callback (`training.StopOnRequest`): the iteration under way ends, is checkpointed,
+    and the run stops as on Ctrl-C. A driver that does not take it (one whose Tune callbacks,
+    restored with the run, lack that one) is interrupted right after its next checkpoint; if it
+    still finished an iteration after that checkpoint, the report says which ones are in no
+    checkpoint. Returns the checkpoint the run stopped at; ValueError if no run is going in
+    `out`, or it ended before a checkpoint."""
     out = Path(out).resolve()
     pid = ray_session.live_driver(out)
     if pid is None:
         raise ValueError(f"--stop: no run is training in {out} (no live driver noted in its "
                          f"{ray_session.SESSION_FILE})")
-    start = time.time()
-    say(f"{out}: waiting for the run's next checkpoint (driver pid {pid})")
-    while True:
-        if ray_session.live_driver(out) is None:
-            raise ValueError(f"--stop: the run in {out} ended before its next checkpoint")
-        if any(_taken_since(c, start) for c in _checkpoints(out)):
-            break
-        time.sleep(poll)
-    time.sleep(settle)
-    os.kill(pid, signal.SIGINT)
-    deadline = time.monotonic() + timeout
-    while ray_session.live_driver(out) is not None:
-        if time.monotonic() > deadline:
-            raise ValueError(f"--stop: the run in {out} (pid {pid}) did not exit within "
-                             f"{timeout:.0f} s of SIGINT")
-        time.sleep(poll)
-    checkpoint = max(_checkpoints(out), key=checkpoint_age)
+    request = out / STOP_REQUEST
+    request.write_text(f"{os.getpid()}\n")
+    say(f"{out}: stopping the run after the iteration under way (driver pid {pid})")
+    try:
+        _interrupt_unless_taken(out, request, pid, poll)
+        deadline = time.monotonic() + timeout
+        while ray_session.live_driver(out) is not None:
+            if time.monotonic() > deadline:
+                raise ValueError(f"--stop: the run in {out} (pid {pid}) did not exit within "
+                                 f"{timeout:.0f} s of stopping")
+            time.sleep(poll)
+    finally:
+        take_stop_request(out)
+    checkpoint = max(_checkpoints(out), key=checkpoint_age, default=None)
+    if checkpoint is None:
+        raise ValueError(f"--stop: the run in {out} ended before its first checkpoint")
     say(f"{out}: stopped after {checkpoint.parent.name}/{checkpoint.name} (iteration "
-        f"{checkpoint_iteration(checkpoint)})")
+        f"{checkpoint_iteration(checkpoint)}){_lost(checkpoint)}")
     return checkpoint
+
+
+def _interrupt_unless_taken(out: Path, request: Path, pid: int, poll: float) -> None:
+    """Wait until the driver takes the stop request, or exits, or writes a checkpoint without
+    having taken it: then withdraw the request and interrupt the driver at once (SIGINT, as
+    Ctrl-C), before it can finish another iteration. Whoever removes the request file acts on
+    it, so the driver is never interrupted twice."""
+    start = time.time()
+    while request.exists() and ray_session.live_driver(out) is not None:
+        if any(_taken_since(c, start) for c in _checkpoints(out)):
+            if take_stop_request(out):
+                os.kill(pid, signal.SIGINT)
+            return
+        time.sleep(poll)
+
+
+def take_stop_request(run_dir: Path) -> bool:
+    """Remove the run's stop request; whether there was one. Removing is atomic, so exactly
+    one of the driver and `stop_run` takes a request."""
+    try:
+        (Path(run_dir) / STOP_REQUEST).unlink()
+    except FileNotFoundError:
+        return False
+    return True
+
+
+def _lost(checkpoint: Path) -> str:
+    """What the report adds when the trial logged iterations after `checkpoint`: those are in
+    no checkpoint, and `--resume` goes on from the checkpoint."""
+    iteration = checkpoint_iteration(checkpoint)
+    last = max((row["training_iteration"] for _, row in _results(checkpoint.parent / "result.json")
+                if isinstance(row.get("training_iteration"), int)), default=iteration)
+    if last <= iteration:
+        return ""
+    after = f"iteration {last}" if last == iteration + 1 else f"iterations {iteration + 1}-{last}"
+    return (f"; {after} finished after it, in no checkpoint: --resume goes on from iteration "
+            f"{iteration}")
 
 
 def _checkpoints(out: Path) -> list[Path]:

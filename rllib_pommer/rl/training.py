@@ -23,6 +23,7 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import signal
 import socket
 import time
 from pathlib import Path
@@ -30,6 +31,7 @@ from pathlib import Path
 import ray
 import torch
 from ray import tune
+from ray.tune.result import SHOULD_CHECKPOINT
 
 from . import quiet, ray_session, tune_state
 from .checkpoint_policy import trial_dirs, unreadable
@@ -42,7 +44,7 @@ from .curriculum import (
     resume_curriculum,
 )
 from .names import LEARNER, LEARNER_THREADS_ENV
-from .packing import pack_run
+from .packing import pack_run, take_stop_request
 from .settings import RunSettings
 
 STOP_KEY = "env_runners/num_episodes_lifetime"
@@ -176,6 +178,27 @@ def _skipped(result: dict) -> str:
     return f"  ({skipped:.0f} updates skipped: non-finite gradients)" if skipped else ""
 
 
+class StopOnRequest(FreshOnRestore):
+    """Stops the run, with every iteration it finished in a checkpoint, when `train --stop`
+    asks (`packing.stop_run`): the first result after the request is checkpointed (Tune's
+    `should_checkpoint`), and once that checkpoint is saved the driver interrupts itself as
+    Ctrl-C would, before another iteration ends. Tune stays in charge of the trial's state, so
+    the run resumes as after Ctrl-C (a trial stopped by Tune's own criteria would count as
+    finished and never resume)."""
+
+    def __init__(self):
+        self._stopping: set[str] = set()
+
+    def on_trial_result(self, iteration, trials, trial, result, **info):
+        if take_stop_request(Path(trial.path).parent):  # <run>/<trial>
+            result[SHOULD_CHECKPOINT] = True
+            self._stopping.add(trial.trial_id)
+
+    def on_checkpoint(self, iteration, trials, trial, checkpoint, **info):
+        if trial.trial_id in self._stopping:
+            signal.raise_signal(signal.SIGINT)  # Tune's handler ends the run after this step
+
+
 class StageCheckpoints(FreshOnRestore):
     """Copies the checkpoint taken at a stage's end to `<run>/stages/<number>-<stage name>`, out of
     reach of Tune's rotation (it keeps the latest three): the policy after each phase of the
@@ -248,13 +271,15 @@ def kept_layouts(out: Path, settings: RunSettings) -> list[str]:
 def start_run(settings: RunSettings, say=print) -> tuple[Curriculum, Path]:
     """Everything a run checks before Ray starts, then Ray: the curriculum and the run directory
     (default runs/<curriculum name>), after ending what a SIGKILLed run in that directory left
-    running (told to `say`) and, to resume, packing it (module docstring). Bad input is a
+    running (told to `say`), dropping a stop request no run took, and, to resume, packing it
+    (module docstring). Bad input is a
     ValueError; a Ray that does not start, a `RayStartError`."""
     given = load_curriculum(settings.curriculum) if settings.curriculum else None
     out = settings.out or Path("runs") / (given.name if given else DEFAULT_CURRICULUM)
     ended = ray_session.reap(out)
     if ended:
         say(f"ended {len(ended)} Ray processes left by the killed run in {out}")
+    take_stop_request(out)  # one left by a `--stop` that did not see the run end: not this run's
     check_run_dir(out, settings.resume)
     curriculum = (resume_curriculum(out, given) if settings.resume
                   else given or load_curriculum(DEFAULT_CURRICULUM))
@@ -337,7 +362,7 @@ def train(curriculum: Curriculum, out: Path, settings: RunSettings):
                 checkpoint_config=tune.CheckpointConfig(
                     checkpoint_frequency=curriculum.ppo.checkpoint_every,
                     checkpoint_at_end=True, num_to_keep=3),
-                callbacks=[Progress(), StageCheckpoints()],
+                callbacks=[Progress(), StageCheckpoints(), StopOnRequest()],
                 verbose=0,
             ),
         )

@@ -15,7 +15,7 @@ import pytest
 from rllib_pommer.rl.checkpoint_policy import MODULE_STATE, load_checkpoint_net
 from rllib_pommer.rl.config import build_config
 from rllib_pommer.rl.curriculum import load_curriculum
-from rllib_pommer.rl.packing import pack_run, stop_at_next_checkpoint
+from rllib_pommer.rl.packing import pack_run, stop_run
 from rllib_pommer.rl.training import check_run_dir, init_ray
 
 STAGE = '[[stage]]\nname = "a"\nopponent = "static"\nepisodes = 5\n'
@@ -128,12 +128,12 @@ def test_run_folders_are_checked_by_relative_path_too(tmp_path, monkeypatch):
     with pytest.raises(ValueError, match="--pack: no run in"):
         pack_run(Path("runs") / "new")
     with pytest.raises(ValueError, match="--stop: no run is training in .*runs/new"):
-        stop_at_next_checkpoint(Path("runs") / "new")
+        stop_run(Path("runs") / "new")
     (tmp_path / "runs" / "new").mkdir(parents=True)  # a run whose driver has exited
     (tmp_path / "runs" / "new" / "ray_session.json").write_text(json.dumps(
         {"session_dir": "/tmp/ray/session_x", "driver_pid": 1, "driver_start": "0"}))
     with pytest.raises(ValueError, match="no live driver noted in its ray_session.json"):
-        stop_at_next_checkpoint(Path("runs") / "new")
+        stop_run(Path("runs") / "new")
 
 
 def test_a_run_still_training_is_not_packed(tmp_path):
