@@ -94,7 +94,8 @@ def main(argv: list[str] | None = None) -> int:
         if stem in done:
             continue
         argv = ["--team", args.team, "--vs", vs, "--games", str(args.games), "--seed",
-                str(args.seed), "--records", str(records), "--json"]
+                str(args.seed), "--records", str(records), "--json",
+                "--force"]  # a cell not finished is played again over its partial file
         if filters:
             argv += ["--filters", ",".join(filters)]
         if args.workers:

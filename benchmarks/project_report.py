@@ -42,7 +42,7 @@ def play_replays(workers: int) -> list[Path]:
             path = REPLAYS / f"{team}_vs_{opponent}.jsonl.gz"
             code = evaluate(["--team", team, "--vs", opponent, "--games", str(FIG5_GAMES),
                              "--seed", "0", "--workers", str(workers),
-                             "--record", str(FIG5_GAMES), "--replays", str(path)])
+                             "--record", str(FIG5_GAMES), "--replays", str(path), "--force"])
             if code != 0:
                 raise SystemExit(f"evaluate {team} vs {opponent} failed (exit {code})")
             files.append(path)

@@ -22,28 +22,19 @@ from pathlib import Path
 from tqdm import tqdm
 
 from .data.collector import SHARD_GAMES, Collection, Dagger, ShardResult
+from .util.cli_options import positive_int
 from .util.outputs import check_output_dir
-
-
-def _positive(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value <= 0:
-        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text!r}")
-    return value
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m rllib_pommer.collect", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--games", type=_positive, required=True)
+    parser.add_argument("--games", type=positive_int, required=True)
     parser.add_argument("--out", type=Path, required=True, help="dataset directory")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--workers", type=_positive, default=None,
+    parser.add_argument("--workers", type=positive_int, default=None,
                         help="processes (default: cores)")
-    parser.add_argument("--shard-games", type=_positive, default=SHARD_GAMES)
+    parser.add_argument("--shard-games", type=positive_int, default=SHARD_GAMES)
     parser.add_argument("--label-draws", type=int, default=0, metavar="K",
                         help="also record SimpleAgent's action counts over K draws from the same "
                              "memory per decision, the soft targets of imitation (0..255)")

@@ -15,8 +15,13 @@ so `python -m rllib_pommer.report` reads the file alone), from which every table
 recomputed.
 Same seed, same records.
 `--record K` also writes the first K games as replays in the reference's JSON Lines schema
-(`--replays FILE`, with every agent's observations if `--with-observations`; TeamRadio replays
-keep every agent's words), for `python -m rllib_pommer.replay render|html|verify`.
+(`--replays FILE`, .jsonl or .jsonl.gz, default arena_replays.jsonl.gz, with every agent's
+observations if `--with-observations`; TeamRadio replays keep every agent's words), for
+`python -m rllib_pommer.replay render|html|verify`.
+
+The outputs are checked before the first game: a records file must end in .jsonl, .jsonl.gz or
+.csv and a replays file in .jsonl or .jsonl.gz, the two may not be one file, `--replays` needs
+`--record K`, and an existing file is replaced only with `--force`.
 """
 
 from __future__ import annotations
@@ -31,9 +36,12 @@ from tqdm import tqdm
 
 from .agents.registry import FILTERS
 from .arena.match import MatchSpec, play_match, record_games
-from .arena.records import summarise, write_records
-from .game.records import write_games
-from .util.outputs import check_output
+from .arena.records import RECORDS_SUFFIXES, summarise, write_records
+from .game.records import JSONL_SUFFIXES, write_games
+from .util.cli_options import non_negative_int, positive_int
+from .util.outputs import check_distinct, check_output
+
+DEFAULT_REPLAYS = Path("arena_replays.jsonl.gz")
 
 
 def _filters(text: str) -> tuple[str, ...]:
@@ -42,13 +50,6 @@ def _filters(text: str) -> tuple[str, ...]:
     if unknown:
         raise argparse.ArgumentTypeError(f"unknown filter {unknown[0]!r}; valid: {list(FILTERS)}")
     return names
-
-
-def _positive(text: str) -> int:
-    value = int(text)
-    if value <= 0:
-        raise argparse.ArgumentTypeError(f"must be a positive number of games, got {value}")
-    return value
 
 
 def format_summary(spec: MatchSpec, summary: dict) -> str:
@@ -73,30 +74,45 @@ def format_summary(spec: MatchSpec, summary: dict) -> str:
     ])
 
 
+def _check_outputs(args: argparse.Namespace) -> Path | None:
+    """Refuse bad outputs before any game (module docstring); the replays file, if any."""
+    if args.replays and not args.record:
+        raise ValueError(f"--replays {args.replays} is written only with --record K, the number "
+                         f"of games to keep as replays")
+    replays = (args.replays or DEFAULT_REPLAYS) if args.record else None
+    check_output(args.records, "--records", args.force, RECORDS_SUFFIXES)
+    check_output(replays, "--replays", args.force, JSONL_SUFFIXES)
+    check_distinct({"--records": args.records, "--replays": replays})
+    return replays
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m rllib_pommer.evaluate", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--team", required=True, help="policy name or file of team A")
     parser.add_argument("--vs", required=True, help="policy name or file of team B")
-    parser.add_argument("--games", type=_positive, default=100)
+    parser.add_argument("--games", type=positive_int, default=100)
     parser.add_argument("--filters", type=_filters, default=(), help="e.g. jitter,action")
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--seed", type=non_negative_int, default=0)
     parser.add_argument("--fixed-seats", action="store_true", help="team A always on {0, 2}")
     parser.add_argument("--variant", choices=("team", "radio"), default="team",
                         help="the game: Team, or TeamRadio with words (default: %(default)s)")
-    parser.add_argument("--workers", type=int, default=None, help="processes (default: cores)")
+    parser.add_argument("--workers", type=positive_int, default=None,
+                        help="processes (default: cores)")
     parser.add_argument("--records", type=Path, help="per-game rows, .jsonl, .jsonl.gz or .csv")
-    parser.add_argument("--record", type=int, default=0, metavar="K",
+    parser.add_argument("--record", type=non_negative_int, default=0, metavar="K",
                         help="write the first K games as replays")
-    parser.add_argument("--replays", type=Path, default=Path("arena_replays.jsonl.gz"),
-                        help="where --record writes (default: %(default)s)")
+    parser.add_argument("--replays", type=Path,
+                        help=f"where --record writes, .jsonl or .jsonl.gz (default: "
+                             f"{DEFAULT_REPLAYS})")
     parser.add_argument("--with-observations", action="store_true",
                         help="replays include every agent's observations")
     parser.add_argument("--json", action="store_true", help="print a final JSON summary")
+    parser.add_argument("--force", action="store_true",
+                        help="replace existing --records and --replays files")
     args = parser.parse_args(argv)
     try:
-        check_output(args.records, "--records")
-        check_output(args.replays if args.record > 0 else None, "--replays")
+        replays = _check_outputs(args)
         spec = MatchSpec(args.team, args.vs, args.games, args.seed, args.filters, args.fixed_seats,
                          args.variant)
         start = time.perf_counter()
@@ -115,9 +131,9 @@ def main(argv: list[str] | None = None) -> int:
         if args.records:
             write_records(args.records, records)
         if args.record > 0:
-            count = write_games(args.replays,
+            count = write_games(replays,
                                 record_games(spec, args.record, args.with_observations))
-            print(f"  wrote {count} replays to {args.replays}")
+            print(f"  wrote {count} replays to {replays}")
     except OSError as exc:
         print(f"error: the match was played, but writing its output failed: {exc}",
               file=sys.stderr)

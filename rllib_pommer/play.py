@@ -13,10 +13,12 @@ keys move, space lays a bomb, any other key plays Stop, and so does no key withi
 
 The game ends with its result, or as a forfeit when the page is closed (or the command is
 stopped); either way it is saved as a replay (`--out`, default play-<time>.jsonl.gz) for
-`python -m rllib_pommer.replay html|render|verify`, and the command exits. Should `--out` fail
-at the end (a full disk, a folder deleted meanwhile), the game goes to a new file in the system's
-temporary folder, whose path is printed. Only one page can hold
-the game: a second one is refused.
+`python -m rllib_pommer.replay html|render|verify`, and the command exits. `--out` is checked
+before the game is served: it must end in .jsonl or .jsonl.gz, and an existing file is replaced
+only with `--force` (a game stopped before its first move would otherwise replace a kept replay
+with a forfeit). Should `--out` fail at the end (a full disk, a folder deleted meanwhile), the
+game goes to a new file in the system's temporary folder, whose path is printed. Only one page
+can hold the game: a second one is refused.
 """
 
 from __future__ import annotations
@@ -27,8 +29,10 @@ import sys
 import time
 from pathlib import Path
 
+from .game.records import JSONL_SUFFIXES
 from .playing.server import RECONNECT, make_app, parse_turn_time, serve_game
 from .playing.session import HumanGame, PlaySpec
+from .util.cli_options import non_negative_int
 from .util.outputs import check_output
 
 DEFAULT_TURN_TIME = 0.5
@@ -52,8 +56,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--vs", required=True, help="policy of the other team")
     parser.add_argument("--seat", type=int, default=0, help="your seat, 0..3 (default 0)")
     parser.add_argument("--teammate", help="policy of your teammate (default: --team)")
-    parser.add_argument("--seed", type=int, default=0, help="deals the board and the agents' "
-                        "random streams, as game 0 of `evaluate --seed`")
+    parser.add_argument("--seed", type=non_negative_int, default=0,
+                        help="deals the board and the agents' random streams, as game 0 of "
+                             "`evaluate --seed`")
     parser.add_argument("--variant", choices=("team", "radio"), default="team",
                         help="the game: Team, or TeamRadio with words (default %(default)s)")
     parser.add_argument("--host", default="127.0.0.1", help="address to bind (default: loopback)")
@@ -65,6 +70,7 @@ def main(argv: list[str] | None = None) -> int:
                         "game is forfeited; the clock waits meanwhile (default %(default)s)")
     parser.add_argument("--out", type=Path, help="the replay, .jsonl or .jsonl.gz "
                         "(default: play-<date>-<time>.jsonl.gz here)")
+    parser.add_argument("--force", action="store_true", help="replace an existing --out file")
     args = parser.parse_args(argv)
     out = args.out or Path(time.strftime("play-%Y%m%d-%H%M%S.jsonl.gz"))
     try:
@@ -72,7 +78,7 @@ def main(argv: list[str] | None = None) -> int:
             raise ValueError(f"--port must be in 0..65535, got {args.port}")
         if not 0 <= args.reconnect <= 3600:
             raise ValueError(f"--reconnect must be 0..3600 seconds, got {args.reconnect}")
-        check_output(out, "--out")
+        check_output(out, "--out", args.force, JSONL_SUFFIXES)
         game = HumanGame(PlaySpec(args.team, args.vs, args.seat, args.teammate, args.seed,
                                   args.variant))
     except ValueError as exc:

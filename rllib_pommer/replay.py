@@ -11,16 +11,20 @@
                      in full or as agent AGENT sees it
     html FILE [--game K] --out game.html
                      write a self-contained replay viewer (play/pause, step slider, speed, fog)
+
+render and html refuse an existing --out file unless given --force.
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 from .agents.agreement import format_line, measure_agreement
 from .game.records import read_games
 from .game.verify import verify_games
+from .util.outputs import check_output
 from .viz.frames import load_game
 from .viz.render import render_game
 from .viz.viewer import write_viewer
@@ -53,12 +57,14 @@ def _agree(args: argparse.Namespace) -> int:
 
 
 def _render(args: argparse.Namespace) -> int:
+    check_output(args.out, "--out", args.force)
     count = render_game(load_game(args.file, args.game), args.out, args.step, args.fog, args.fps)
     print(f"wrote {args.out} ({count} frame{'s' if count > 1 else ''})")
     return 0
 
 
 def _html(args: argparse.Namespace) -> int:
+    check_output(args.out, "--out", args.force)
     write_viewer(load_game(args.file, args.game), args.out)
     print(f"wrote {args.out}")
     return 0
@@ -91,15 +97,17 @@ def main(argv: list[str] | None = None) -> int:
     render = sub.add_parser("render", help="draw a recorded game as a PNG (one step) or a GIF")
     render.add_argument("file", help="games as .jsonl or .jsonl.gz")
     render.add_argument("--game", type=int, default=0, help="which game of the file, from 0")
-    render.add_argument("--out", required=True, help="OUT.png or OUT.gif")
+    render.add_argument("--out", type=Path, required=True, help="OUT.png or OUT.gif")
     render.add_argument("--step", type=int, help="the PNG's step, from 0 (default: the last)")
     render.add_argument("--fog", type=int, metavar="AGENT", help="show what AGENT sees")
     render.add_argument("--fps", type=_positive_fps, default=8, help="GIF steps per second")
+    render.add_argument("--force", action="store_true", help="replace an existing --out file")
     render.set_defaults(run=_render)
     html = sub.add_parser("html", help="write a self-contained HTML replay viewer")
     html.add_argument("file", help="games as .jsonl or .jsonl.gz")
     html.add_argument("--game", type=int, default=0, help="which game of the file, from 0")
-    html.add_argument("--out", required=True, help="the .html file to write")
+    html.add_argument("--out", type=Path, required=True, help="the .html file to write")
+    html.add_argument("--force", action="store_true", help="replace an existing --out file")
     html.set_defaults(run=_html)
     args = parser.parse_args(argv)
     try:

@@ -14,12 +14,14 @@ import numpy as np
 
 from ..game.constants import TEAM_PRESET
 from ..game.kills import deaths_by_cause, kills_of_team
-from ..game.records import open_text
+from ..game.records import JSONL_SUFFIXES, open_text
 from .rates import wilson
 
 # The name ending of the record files the project's own jobs write (tables, ladder): gzipped
-# JSON Lines, about a twentieth of the plain size. Readers take .jsonl, .jsonl.gz and .csv alike.
+# JSON Lines, about a twentieth of the plain size.
 RECORDS_SUFFIX = ".jsonl.gz"
+# The kinds of records file written and read: JSON Lines (plain or gzipped) and .csv.
+RECORDS_SUFFIXES = (*JSONL_SUFFIXES, ".csv")
 
 
 @dataclass

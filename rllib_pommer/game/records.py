@@ -40,6 +40,10 @@ class _StamplessGzip(gzip.GzipFile):
             self._owned.close()
 
 
+# The names a JSON Lines file of game records takes: plain, or gzipped (`open_text`).
+JSONL_SUFFIXES = (".jsonl", ".jsonl.gz")
+
+
 def open_text(path: Path, mode: str):
     """A .jsonl file, or a .jsonl.gz one through gzip, opened as text for `mode` ("r", "w")."""
     if path.suffix != ".gz":

@@ -44,3 +44,26 @@ def settings_from(settings: type, args: argparse.Namespace):
     """The dataclass `settings` made from the parsed options `add_options` added."""
     return settings(**{field.name: getattr(args, field.name)
                        for field in dataclasses.fields(settings)})
+
+
+def _integer_from(text: str, minimum: int, what: str) -> int:
+    """`text` as an integer of at least `minimum`; argparse's error names the option and the
+    text as given (a count of "1e9" or "-1" is refused, never read as something else)."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = minimum - 1
+    if value < minimum:
+        raise argparse.ArgumentTypeError(f"must be a {what} integer, got {text!r}")
+    return value
+
+
+def positive_int(text: str) -> int:
+    """An argparse type for counts that must be at least 1: games, processes."""
+    return _integer_from(text, 1, "positive")
+
+
+def non_negative_int(text: str) -> int:
+    """An argparse type for seeds (numpy's seed sequences take no negative entropy) and counts
+    that may be 0."""
+    return _integer_from(text, 0, "non-negative")

@@ -154,7 +154,16 @@ def _exit_code(args) -> int:
 @pytest.mark.parametrize(("args", "message"), [
     (["--team", "nosuch", "--vs", "simple"], "unknown policy 'nosuch'; valid: "),
     (["--team", "simple", "--vs", "simple", "--filters", "jitter,magic"], "unknown filter 'magic'"),
-    (["--team", "simple", "--vs", "simple", "--games", "0"], "must be a positive number"),
+    (["--team", "simple", "--vs", "simple", "--games", "0"],
+     "argument --games: must be a positive integer, got '0'"),
+    (["--team", "simple", "--vs", "static", "--record", "-1"],
+     "argument --record: must be a non-negative integer, got '-1'"),
+    (["--team", "simple", "--vs", "static", "--workers", "-1"],
+     "argument --workers: must be a positive integer, got '-1'"),
+    (["--team", "simple", "--vs", "static", "--seed", "-1"],
+     "argument --seed: must be a non-negative integer, got '-1'"),
+    (["--team", "simple", "--vs", "static", "--replays", "r.jsonl.gz"],
+     "--replays r.jsonl.gz is written only with --record K"),
     (["--team", "simple", "--vs", "static", "--records", "/nodir/x.jsonl"],
      "--records /nodir/x.jsonl: folder /nodir does not exist"),
     (["--team", "simple", "--vs", "static", "--records", "/tmp"], "is a directory"),
@@ -163,7 +172,8 @@ def _exit_code(args) -> int:
 ])
 def test_bad_arguments_are_named(args, message, capsys):
     assert _exit_code(args) == 2
-    assert message in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert message in err and err.count("error:") == 1, err
 
 
 def test_wilson_intervals_stay_within_0_and_1():
