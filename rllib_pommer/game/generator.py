@@ -51,6 +51,16 @@ def _layout(size: int) -> tuple[np.ndarray, list[tuple[int, int]], np.ndarray]:
 _SKELETON, _PAIR_LIST, _PAIRS = _layout(BOARD_SIZE)
 
 
+def fixed_cells() -> np.ndarray:
+    """(S, S) int8: the code every starting board holds on each cell (docs/rules.md §2.2), or -1
+    where walls are drawn at random. The agents' corners read Passage (agents move off them), so
+    an agent can tell these cells without seeing them."""
+    fixed = np.where(_SKELETON >= Item.AGENT0, Item.PASSAGE, _SKELETON).astype(np.int8)
+    fixed[_PAIRS[:, 0], _PAIRS[:, 1]] = -1
+    fixed[_PAIRS[:, 1], _PAIRS[:, 0]] = -1
+    return fixed
+
+
 @njit(cache=True)
 def count_unreachable_passages(board, start_row, start_col):
     """Passage cells that a 4-way flood fill from the start (through all but Rigid) misses."""

@@ -1,0 +1,441 @@
+"""`search`: a tree search over the agent's own moves with pessimistic scenarios, in the manner
+of Osogami and Takahashi's real-time tree search (ACML 2019), in our own words and code
+(docs/search.md says what it does and what it assumes about the enemies).
+
+Per decision the agent rebuilds the state it believes in from its observation and memory
+(`belief.py`), then tries every sequence of its own actions `depth` steps deep on copies of that
+state with the compiled step, everybody else standing still. Each leaf is judged by two
+scenarios played forward `horizon` steps (`survival.py`): a plain one (the bombs on the board go
+off) and a pessimistic one (every believed enemy also lays a bomb where it stands). Its score
+puts surviving first (a way out of the plain scenario, then of the pessimistic one, then room to
+move), then the enemies it kills or leaves without a way out of the plain scenario, its
+teammate's way out, then wood its new bombs burn, power-ups it picks up and how near it comes to
+the nearest enemy (a path cost where wood counts extra, so it bombs its way through). An action
+is worth its best leaf; ties are broken by a draw from the agent's own seeded stream.
+
+The effort (depth, horizon, recall) comes from the policy file (`Effort.from_spec`), never from
+a clock, so a seeded game replays exactly. `search_actions` decides for a batch of observation
+rows with their memory rows, which the arena's `SearchAgent` (one row) and RLlib's fixed module
+(`rl/search_module.py`, many) both call.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+from numba import njit
+
+from ..game.blast import mark_blast
+from ..game.constants import (
+    ACTION_DC,
+    ACTION_DR,
+    BOMB_LIFE_AT_LAYING,
+    NUM_ACTIONS,
+    NUM_AGENTS,
+    RADIO_NUM_WORDS,
+    TEAM_PRESET,
+    Action,
+    GameType,
+    Item,
+    has_teams,
+)
+from ..game.observation import Observation
+from ..game.state import (
+    A_ALIVE,
+    A_AMMO,
+    A_COL,
+    A_ROW,
+    B_BLAST,
+    B_COL,
+    B_LIFE,
+    B_OWNER,
+    B_ROW,
+    M_BOMBS,
+    M_FLAMES,
+)
+from ..game.step import step_game
+from .belief import (
+    AGENT_BASE,
+    CELLS,
+    G_COL,
+    G_ROW,
+    G_SEEN,
+    LAST_ACTION,
+    P_SEEN,
+    RNG,
+    empty_belief,
+    rebuild,
+    remember,
+)
+from .belief import new_memory as new_belief_memory
+from .rng import next_uniform, seed_states
+from .survival import escape_cells, play_scenario
+
+STOP, BOMB = int(Action.STOP), int(Action.BOMB)
+RIGID, WOOD, BOMB_CODE, FOG = (int(i) for i in (Item.RIGID, Item.WOOD, Item.BOMB, Item.FOG))
+EXTRA_BOMB, KICK, AGENT0 = int(Item.EXTRA_BOMB), int(Item.KICK), int(Item.AGENT0)
+TEAM_GAME, BLAST_CAP = int(GameType.TEAM), TEAM_PRESET.blast_cap
+_has_teams = njit(inline="always")(has_teams)
+UNREACHABLE = 1 << 20
+
+# The score of a leaf (docs/search.md §4): survival dominates everything else by orders of size.
+DEAD = -1e9  # the agent dies within the tree; each step it lived first adds STEP_LIVED
+STEP_LIVED = 1e6
+DOOMED = -1e7  # no way out even if nobody lays another bomb
+CORNERED = -5e3  # no way out if every enemy lays a bomb where it stands now
+ROOM = 10.0  # per cell it can be on at the horizon of the pessimistic scenario, up to ROOM_CAP
+ROOM_CAP = 8
+KILL = 2e3  # per enemy dead, or without a way out of the plain scenario
+TEAMMATE_LOST = -3e3  # the teammate has no way out of the plain scenario
+WOOD_BURNT = 15.0  # per wooden cell the agent's new bombs burn that no older bomb does
+POWER_UP = 60.0  # per power-up picked up
+HUNT = 6.0  # per unit of path cost to the nearest enemy
+WOOD_COST, BOMB_COST = 4, 2  # path cost of entering a wooden cell, a bomb's cell; others 1
+STALE = 10  # with no enemy to head for: fogged cells seen at most this long after the oldest
+
+
+@dataclass(frozen=True)
+class Effort:
+    """How hard the agent searches: its own actions `depth` steps deep (6**depth sequences at
+    most), each leaf's scenarios `horizon` steps long (at least a bomb's life, so that bombs laid
+    in the tree go off within it), and enemies out of view believed where they were last seen
+    for `recall` steps."""
+
+    depth: int = 2
+    horizon: int = 10
+    recall: int = 5
+
+    BOUNDS: ClassVar[dict] = {"depth": (1, 3), "horizon": (BOMB_LIFE_AT_LAYING, 20),
+                              "recall": (0, 800)}
+
+    @classmethod
+    def from_params(cls, params, where: str) -> Effort:
+        """The effort a policy file's keys ask for; a value out of bounds is a one-line
+        ValueError naming `where` (the file), the key and the value."""
+        for key, value in params.items():
+            low, high = cls.BOUNDS[key]
+            if not low <= value <= high:
+                raise ValueError(f"policy file {where}: {key} must be in {low}..{high}, "
+                                 f"got {value!r}")
+        return cls(**params)
+
+
+@njit(cache=True, inline="always")
+def _is_enemy(me, other, game_type):
+    return other % 2 != me % 2 if _has_teams(game_type) else other != me
+
+
+@njit(cache=True)
+def hunt_distances(board, targets, n_targets):
+    """(S, S) path cost from each cell to the nearest of the target cells (rows of `targets`):
+    the cost of a path is that of the cells it enters, 1 each, WOOD_COST for wood, BOMB_COST for
+    a bomb; rigid walls cannot be entered. Dijkstra from the targets."""
+    size = board.shape[0]
+    dist = np.full((size, size), UNREACHABLE, np.int64)
+    done = np.zeros((size, size), np.bool_)
+    for k in range(n_targets):
+        dist[targets[k, 0], targets[k, 1]] = 0
+    for _ in range(size * size):
+        best, br, bc = UNREACHABLE, -1, -1
+        for r in range(size):
+            for c in range(size):
+                if not done[r, c] and dist[r, c] < best:
+                    best, br, bc = dist[r, c], r, c
+        if br < 0:
+            break
+        done[br, bc] = True
+        code = board[br, bc]
+        enter = WOOD_COST if code == WOOD else BOMB_COST if code == BOMB_CODE else 1
+        for k in range(1, 5):
+            rr, cc = br + ACTION_DR[k], bc + ACTION_DC[k]
+            if 0 <= rr < size and 0 <= cc < size and board[rr, cc] != RIGID:
+                dist[rr, cc] = min(dist[rr, cc], best + enter)
+    return dist
+
+
+@njit(cache=True)
+def _can_play(board, agents, bombs, meta, me, action):
+    """Whether `action` differs from Stop here: a move onto the board and not into a wall, a bomb
+    with ammo on a cell without one."""
+    r, c = agents[me, A_ROW], agents[me, A_COL]
+    if action == STOP:
+        return True
+    if action == BOMB:
+        if agents[me, A_AMMO] < 1:
+            return False
+        for b in range(meta[M_BOMBS]):
+            if bombs[b, B_ROW] == r and bombs[b, B_COL] == c:
+                return False
+        return True
+    rr, cc = r + ACTION_DR[action], c + ACTION_DC[action]
+    size = board.shape[0]
+    return 0 <= rr < size and 0 <= cc < size and board[rr, cc] != RIGID and board[rr, cc] != WOOD
+
+
+@njit(cache=True)
+def _scenario_key(agents, bombs, flames, meta):
+    """A hash of what the scenarios depend on besides the searching agent: bombs, flames and
+    which agents live (the others stand still in the tree)."""
+    h = np.uint64(1469598103934665603)
+    prime = np.uint64(1099511628211)
+    for b in range(meta[M_BOMBS]):
+        for j in range(bombs.shape[1]):
+            h = (h ^ np.uint64(bombs[b, j] + 7)) * prime
+    for f in range(meta[M_FLAMES]):
+        for j in range(flames.shape[1]):
+            h = (h ^ np.uint64(flames[f, j] + 11)) * prime
+    for a in range(NUM_AGENTS):
+        h = (h ^ np.uint64(agents[a, A_ALIVE] + 13)) * prime
+    return h
+
+
+@njit(cache=True)
+def _wood_burnt(board, bombs, meta, me, depth):
+    """Wooden cells in the blasts of the bombs `me` laid within the tree (life above
+    9 - depth) that no other bomb's blast reaches."""
+    size = board.shape[0]
+    new = np.zeros((size, size), np.uint8)
+    old = np.zeros((size, size), np.uint8)
+    for b in range(meta[M_BOMBS]):
+        fresh = bombs[b, B_OWNER] == me and bombs[b, B_LIFE] > BOMB_LIFE_AT_LAYING - 1 - depth
+        mark_blast(board, new if fresh else old, bombs[b, B_ROW], bombs[b, B_COL],
+                   bombs[b, B_BLAST])
+    count = 0
+    for r in range(size):
+        for c in range(size):
+            if new[r, c] and not old[r, c] and board[r, c] == WOOD:
+                count += 1
+    return count
+
+
+@njit(cache=True)
+def _leaf_score(lb, la, lbo, lf, li, lm, lr, root_alive, me, game_type, depth, hunt, cache_keys,
+                cache_plain_fire, cache_plain_blocked, cache_pess_fire, cache_pess_blocked,
+                n_cached):
+    """The score of one leaf (module docstring); returns (score, cache entries used)."""
+    mr, mc = la[me, A_ROW], la[me, A_COL]
+    key = _scenario_key(la, lbo, lf, lm)
+    slot = -1
+    for k in range(n_cached):
+        if cache_keys[k] == key:
+            slot = k
+            break
+    if slot < 0:
+        slot = n_cached
+        n_cached += 1
+        cache_keys[slot] = key
+        bombers = np.zeros(NUM_AGENTS, np.bool_)
+        play_scenario(lb, la, lbo, lf, li, lm, lr, me, bombers, cache_plain_fire[slot],
+                      cache_plain_blocked[slot])
+        for a in range(NUM_AGENTS):
+            bombers[a] = la[a, A_ALIVE] != 0 and _is_enemy(me, a, game_type)
+        play_scenario(lb, la, lbo, lf, li, lm, lr, me, bombers, cache_pess_fire[slot],
+                      cache_pess_blocked[slot])
+    plain_fire, plain_blocked = cache_plain_fire[slot], cache_plain_blocked[slot]
+    score = 0.0
+    if escape_cells(plain_fire, plain_blocked, mr, mc, 1) == 0:
+        score += DOOMED
+    room = escape_cells(cache_pess_fire[slot], cache_pess_blocked[slot], mr, mc, ROOM_CAP)
+    score += CORNERED if room == 0 else ROOM * room
+    for a in range(NUM_AGENTS):
+        if a == me or not root_alive[a]:
+            continue
+        lost = la[a, A_ALIVE] == 0 or escape_cells(
+            plain_fire, plain_blocked, la[a, A_ROW], la[a, A_COL], 1) == 0
+        if lost:
+            score += KILL if _is_enemy(me, a, game_type) else TEAMMATE_LOST
+    score += WOOD_BURNT * _wood_burnt(lb, lbo, lm, me, depth) - HUNT * min(hunt[mr, mc], 1000)
+    return score, n_cached
+
+
+@njit(cache=True)
+def decide(board, agents, bombs, flames, items, meta, radio, me, game_type, depth, horizon, hunt,
+           rng, row):
+    """The action of the searching agent `me` in the believed state (module docstring)."""
+    size = board.shape[0]
+    levels = depth + 1
+    lb = np.empty((levels,) + board.shape, board.dtype)
+    la = np.empty((levels,) + agents.shape, agents.dtype)
+    lbo = np.empty((levels,) + bombs.shape, bombs.dtype)
+    lf = np.empty((levels,) + flames.shape, flames.dtype)
+    li = np.empty((levels,) + items.shape, items.dtype)
+    lm = np.empty((levels,) + meta.shape, meta.dtype)
+    lr = np.empty((levels,) + radio.shape, radio.dtype)
+    lb[0] = board
+    la[0] = agents
+    lbo[0] = bombs
+    lf[0] = flames
+    li[0] = items
+    lm[0] = meta
+    lr[0] = radio
+    gain = np.zeros(levels)
+    leaves = NUM_ACTIONS ** depth
+    cache_keys = np.empty(leaves, np.uint64)
+    plain_fire = np.empty((leaves, horizon, size, size), np.bool_)
+    plain_blocked = np.empty((leaves, horizon, size, size), np.bool_)
+    pess_fire = np.empty((leaves, horizon, size, size), np.bool_)
+    pess_blocked = np.empty((leaves, horizon, size, size), np.bool_)
+    n_cached = 0
+    root_alive = agents[:, A_ALIVE] != 0
+    actions = np.zeros(NUM_AGENTS, np.int64)
+    words = np.zeros((NUM_AGENTS, RADIO_NUM_WORDS), np.int64)
+    rewards = np.zeros(NUM_AGENTS, np.int64)
+    burn = np.zeros((size, size), np.uint8)
+    killers = np.zeros(NUM_AGENTS, np.uint8)
+    value = np.full(NUM_ACTIONS, -np.inf)
+    chosen = np.full(levels, -1, np.int64)
+    level = 0
+    while level >= 0:
+        chosen[level] += 1
+        action = chosen[level]
+        if action >= NUM_ACTIONS:
+            level -= 1
+            continue
+        if not _can_play(lb[level], la[level], lbo[level], lm[level], me, action):
+            continue
+        nxt = level + 1
+        lb[nxt] = lb[level]
+        la[nxt] = la[level]
+        lbo[nxt] = lbo[level]
+        lf[nxt] = lf[level]
+        li[nxt] = li[level]
+        lm[nxt] = lm[level]
+        lr[nxt] = lr[level]
+        actions[me] = action
+        step_game(lb[nxt], la[nxt], lbo[nxt], lf[nxt], li[nxt], lm[nxt], lr[nxt], actions, words,
+                  rewards, TEAM_GAME, 1 << 30, BLAST_CAP, burn, killers)
+        r, c = la[nxt, me, A_ROW], la[nxt, me, A_COL]
+        picked = EXTRA_BOMB <= lb[level, r, c] <= KICK and la[nxt, me, A_ALIVE] != 0
+        gain[nxt] = gain[level] + (POWER_UP if picked else 0.0)
+        if la[nxt, me, A_ALIVE] == 0:
+            score = DEAD + STEP_LIVED * level
+        elif nxt < depth:
+            level = nxt
+            chosen[level] = -1
+            continue
+        else:
+            score, n_cached = _leaf_score(
+                lb[nxt], la[nxt], lbo[nxt], lf[nxt], li[nxt], lm[nxt], lr[nxt], root_alive, me,
+                game_type, depth, hunt, cache_keys, plain_fire, plain_blocked, pess_fire,
+                pess_blocked, n_cached)
+            score += gain[nxt]
+        value[chosen[0]] = max(value[chosen[0]], score)
+    best = STOP
+    best_value = -np.inf
+    for action in range(NUM_ACTIONS):
+        noisy = value[action] + next_uniform(rng, row)
+        if noisy > best_value:
+            best, best_value = action, noisy
+    return best
+
+
+@njit(cache=True)
+def hunt_targets(board, alive, me, game_type, step, memory, targets):
+    """Fill `targets` with the cells to head for and return their number: the living enemies
+    in view, and those out of view where they were last seen (or started) unless that cell is in
+    view now; with none of those, the fogged cells seen longest ago (never-seen ones first), so
+    the agent goes looking."""
+    size = board.shape[0]
+    n = 0
+    for a in range(NUM_AGENTS):
+        if not alive[a] or not _is_enemy(me, a, game_type):
+            continue
+        r = memory[AGENT_BASE + 4 * a + G_ROW]
+        c = memory[AGENT_BASE + 4 * a + G_COL]
+        if memory[AGENT_BASE + 4 * a + G_SEEN] == step or board[r, c] == FOG:
+            targets[n, 0], targets[n, 1] = r, c
+            n += 1
+    if n > 0:
+        return n
+    oldest = UNREACHABLE
+    for p in range(CELLS):
+        if board[p // size, p % size] == FOG:
+            oldest = min(oldest, memory[P_SEEN * CELLS + p])
+    for p in range(CELLS):
+        if board[p // size, p % size] == FOG and memory[P_SEEN * CELLS + p] <= oldest + STALE:
+            targets[n, 0], targets[n, 1] = p // size, p % size
+            n += 1
+    return n
+
+
+@njit(cache=True)
+def _decide_rows(board, blast, life, direction, flame, position, ammo, strength, can_kick, alive,
+                 agent_id, game_type, step, active, memory, rng, depth, horizon, recall, belief):
+    m_rows = board.shape[0]
+    out = np.zeros(m_rows, np.int64)
+    s_board, s_agents, s_bombs, s_flames, s_items, s_meta, s_radio = belief
+    targets = np.empty((CELLS, 2), np.int64)
+    for m in range(m_rows):
+        if not active[m]:
+            continue
+        me = agent_id[m]
+        remember(board[m], blast[m], life[m], direction[m], flame[m], position[m], me, step[m],
+                 memory[m])
+        s_bombs[:] = 0
+        s_flames[:] = 0
+        rebuild(board[m], blast[m], life[m], direction[m], flame[m], position[m], ammo[m],
+                strength[m], can_kick[m], alive[m], me, step[m], recall, memory[m], s_board,
+                s_agents, s_bombs, s_flames, s_meta)
+        n_targets = hunt_targets(board[m], alive[m], me, game_type[m], step[m], memory[m],
+                                 targets)
+        hunt = hunt_distances(s_board, targets, n_targets)
+        out[m] = decide(s_board, s_agents, s_bombs, s_flames, s_items, s_meta, s_radio, me,
+                        game_type[m], depth, horizon, hunt, rng, m)
+        memory[m, LAST_ACTION] = out[m]
+    return out
+
+
+def new_memory(rows: int, rng: np.random.Generator) -> np.ndarray:
+    """Fresh memory rows (`belief.py`) whose random streams are drawn from `rng`."""
+    memory = new_belief_memory(rows)
+    memory[:, RNG] = seed_states(rng, rows).view(np.int64)
+    return memory
+
+
+def search_actions(obs: Observation, memory: np.ndarray, effort: Effort,
+                   active: np.ndarray | None = None) -> np.ndarray:
+    """Actions (M,) for observation rows of leading shape (M,); row m of `memory` (M,
+    belief.MEMORY_SIZE) belongs to the agent seeing row m and is updated in place. Rows where
+    `active` is False are skipped (Stop, memory untouched)."""
+    rows = obs.board.shape[0]
+    active = np.ones(rows, np.bool_) if active is None else np.asarray(active, np.bool_)
+    rng = np.ascontiguousarray(memory[:, RNG]).view(np.uint64)
+    actions = _decide_rows(
+        np.ascontiguousarray(obs.board, np.uint8),
+        np.ascontiguousarray(obs.bomb_blast_strength, np.uint8),
+        np.ascontiguousarray(obs.bomb_life, np.uint8),
+        np.ascontiguousarray(obs.bomb_moving_direction, np.uint8),
+        np.ascontiguousarray(obs.flame_life, np.uint8),
+        np.ascontiguousarray(obs.position, np.int64),
+        np.ascontiguousarray(obs.ammo, np.int64),
+        np.ascontiguousarray(obs.blast_strength, np.int64),
+        np.ascontiguousarray(obs.can_kick, np.int64),
+        np.ascontiguousarray(obs.alive, np.bool_),
+        np.ascontiguousarray(obs.agent_id, np.int64),
+        np.ascontiguousarray(obs.game_type, np.int64),
+        np.ascontiguousarray(obs.step_count, np.int64),
+        active, memory, rng, effort.depth, effort.horizon, effort.recall, empty_belief())
+    memory[:, RNG] = rng.view(np.int64)
+    return actions
+
+
+class SearchAgent:
+    """The Agent protocol over `search_actions`, with a memory of one row."""
+
+    def __init__(self, effort: Effort | None = None) -> None:
+        self.effort = effort or Effort()
+        self.memory = new_memory(1, np.random.default_rng(0))
+
+    @classmethod
+    def from_spec(cls, spec) -> SearchAgent:
+        """The agent a `search` policy file describes (`agents/registry.py`)."""
+        return cls(Effort.from_params(spec.params, str(spec.path)))
+
+    def reset(self, agent_id: int, game_type: int, rng: np.random.Generator) -> None:
+        self.memory = new_memory(1, rng)
+
+    def act(self, obs: Observation) -> int:
+        rows = Observation._make([np.asarray(field)[None] for field in obs])
+        return int(search_actions(rows, self.memory, self.effort)[0])
