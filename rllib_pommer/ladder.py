@@ -1,13 +1,15 @@
 """`python -m rllib_pommer.ladder --out DIR [--policies a,b,c] [--games N] [--seed S]`: a ladder.
 
 Plays every pair of the policies (default: every policy in policies/ that plays here, and each
-learned one also with both filters, `_jitter_action`) for N games, seats balanced, and rates
-them: DIR/ladder.md (the table: rating, 95% interval, games, wins / losses / ties), DIR/ladder.json
-(the same and each pair's results) and DIR/ladder.png (ratings with their intervals). Each
-pair's games are kept as arena records, DIR/records/<a>__vs__<b>.jsonl.gz, as soon as its match
-ends; running the command again resumes: pairs played with the same N and seed are kept, a new
-policy plays only its new pairs, and a pair played with another N or seed is refused. The model,
-the scale and the intervals: rllib_pommer/arena/ladder.py.
+learned one also with both filters, `_jitter_action`) for N games (even: seats balanced), and
+rates them: DIR/ladder.md (the table: rating, 95% interval, games, wins / losses / ties),
+DIR/ladder.json (the same and each pair's results) and DIR/ladder.png (ratings with their
+intervals). Each pair's games are kept as arena records, DIR/records/<a>__vs__<b>.jsonl.gz, as
+soon as its match ends, and DIR/records/played.json keeps N, the seed and a digest of each
+policy's file and weights. Running the command again resumes: pairs played with the same N and
+seed are kept and a new policy plays only its new pairs; another N or seed, a damaged pair file
+and the pairs of a policy changed since they were played are refused, naming what. The model,
+the scale, the intervals and what is refused: rllib_pommer/arena/ladder.py.
 """
 
 from __future__ import annotations
@@ -24,23 +26,28 @@ from .arena.ladder import (
     LADDER_FILE,
     Ladder,
     default_policies,
-    played_pairs,
     rate,
+    resume,
     save_pair,
     write_ladder,
 )
 from .arena.match import play_match
+from .util.cli_options import non_negative_int, positive_int
 from .util.outputs import check_output_dir
 from .viz.ladder import draw_ladder
 
 
 def _names(text: str) -> tuple[str, ...]:
-    return tuple(name.strip() for name in text.split(",") if name.strip())
+    names = tuple(name.strip() for name in text.split(",") if name.strip())
+    if not names:
+        raise argparse.ArgumentTypeError(f"names no policy (got {text!r}); leave --policies out "
+                                         f"for the default ladder")
+    return names
 
 
 def play(ladder: Ladder, out: Path, workers: int | None) -> dict:
     """Every pair not yet in `out`, with progress on stderr; all pairs' records."""
-    played = played_pairs(ladder, out)  # refuses another ladder's pairs before any game
+    played = resume(ladder, out)  # refuses another ladder's pairs before any game
     todo = [pair for pair in ladder.pairs() if pair not in played]
     print(f"{len(ladder.pairs())} pairs of {len(ladder.policies)} policies: {len(played)} "
           f"played before, {len(todo)} to play ({len(todo) * ladder.games} games)")
@@ -66,12 +73,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--policies", type=_names,
                         help="comma-separated policy names (default: every shipped and "
                              "scripted policy, learned ones also with _jitter_action)")
-    parser.add_argument("--games", type=int, default=200, help="games a pair (%(default)s)")
-    parser.add_argument("--seed", type=int, default=0,
+    parser.add_argument("--games", type=int, default=200,
+                        help="games a pair, even (%(default)s)")
+    parser.add_argument("--seed", type=non_negative_int, default=0,
                         help="every pair's match seed, and the bootstrap's (%(default)s)")
     parser.add_argument("--bootstrap", type=int, default=BOOTSTRAP,
                         help="replicates for the intervals (%(default)s)")
-    parser.add_argument("--workers", type=int, default=None, help="processes (default: cores)")
+    parser.add_argument("--workers", type=positive_int, default=None,
+                        help="processes (default: cores)")
     args = parser.parse_args(argv)
     try:
         check_output_dir(args.out, "--out")

@@ -248,6 +248,19 @@ CASES = [
     ("ladder --out a file", ladder,
      lambda t, r, s: ["--policies", "static,simple", "--out", str(_a_file(t))],
      "a_file is a file, not a folder"),
+    # issue 50
+    ("ladder --policies naming none", ladder,
+     lambda t, r, s: ["--policies", "", "--out", str(t / "l")],
+     "argument --policies: names no policy (got ''); leave --policies out for the default"),
+    ("ladder --games odd", ladder,
+     lambda t, r, s: ["--policies", "static,simple", "--games", "3", "--out", str(t / "l")],
+     "games a pair must be even, so that each policy plays half of them on seats {0, 2}"),
+    ("ladder --workers -1", ladder,
+     lambda t, r, s: ["--policies", "static,simple", "--workers", "-1", "--out", str(t / "l")],
+     "argument --workers: must be a positive integer, got '-1'"),
+    ("ladder --seed -1", ladder,
+     lambda t, r, s: ["--policies", "static,simple", "--seed", "-1", "--out", str(t / "l")],
+     "argument --seed: must be a non-negative integer, got '-1'"),
 ]
 
 

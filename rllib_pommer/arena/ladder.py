@@ -2,16 +2,24 @@
 
 Pairs. Every unordered pair of the ladder's policies plays one match: the two names in sorted
 order as team A and team B (so a ladder does not depend on the order its policies are listed in),
-`games` games with seats balanced (the arena's default) and the ladder's seed. A name may carry
-the registry's filter suffixes (`ppo_team_jitter_action`): a filtered policy is a policy of its
-own on the ladder.
+`games` games with seats balanced (the arena's default: team A on seats {0, 2} in even games and
+{1, 3} in odd ones, so `games` must be even) and the ladder's seed. A name may carry the
+registry's filter suffixes (`ppo_team_jitter_action`): a filtered policy is a policy of its own
+on the ladder.
 
 Records. Each pair's games are an arena records file, `<folder>/records/<a>__vs__<b>.jsonl.gz` (the
 rows `evaluate --records` writes, which name their match), written whole when the pair's match
-ends (a temporary file renamed), so an interrupted ladder keeps every pair it finished. A pair
-whose file holds games 0..games-1 of the ladder's seed is played and never played again; a file
-made with another number of games or seed is refused, naming it: its games would not be this
-ladder's, and mixing them would rate pairs on unequal terms. Adding a policy adds only its pairs.
+ends (a temporary file renamed), so an interrupted ladder keeps every pair it finished. Beside
+them `records/played.json` keeps the games a pair and the seed they were played with and a
+digest of what each policy plays (`policy_digest`: its file's keys and its weights), written
+before the first game. A pair whose file holds games 0..games-1 of the ladder's seed is played
+and never played again. Everything else is refused before any game, naming the file or the
+policy, and never mixed into the ratings: a ladder asking for other games or another seed than
+its folder's, a pair file with a game missing or repeated (cut short or damaged), and the pairs
+of a policy whose digest changed since they were played (new weights, `greedy = true` added):
+their games are not what the policy now plays. A folder without `played.json` takes its games
+and seed from its `ladder.json` (or, lacking that too, from the ladder asked for) and its
+policies as they are now. Adding a policy adds only its pairs.
 
 Ratings. A Bradley-Terry model fitted by maximum likelihood over all games at once (choix's
 iterative Luce spectral ranking on the matrix of wins): policy i beats policy j with probability
@@ -36,11 +44,13 @@ says so in words).
 
 from __future__ import annotations
 
+import hashlib
 import itertools
 import json
 import math
 import os
-from collections.abc import Mapping, Sequence
+from collections import Counter
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -53,7 +63,9 @@ from .match import MatchSpec
 from .records import RECORDS_SUFFIX, GameRecord, game_record, write_records
 
 RECORDS_DIR = "records"
+PLAYED_FILE = "played.json"  # in RECORDS_DIR: the games, seed and digests pairs were played with
 LADDER_FILE = "ladder.json"
+VERSUS = "__vs__"  # between the two names of a pair's file
 FILTERED = "_jitter_action"  # the variant of each learned policy a default ladder also rates
 ELO = 400 / math.log(10)  # Elo points per unit of Bradley-Terry strength
 VIRTUAL_TIES = 1  # tied games that are not played, added to every pair (module docstring)
@@ -76,6 +88,9 @@ class Ladder:
     def __post_init__(self):
         if self.games <= 0:
             raise ValueError(f"games a pair must be a positive number, got {self.games}")
+        if self.games % 2:
+            raise ValueError(f"games a pair must be even, so that each policy plays half of "
+                             f"them on seats {{0, 2}} and half on {{1, 3}}; got {self.games}")
         if self.bootstrap < 1:
             raise ValueError(f"bootstrap replicates must be at least 1, got {self.bootstrap}")
         if len(set(self.policies)) < 2:
@@ -107,7 +122,24 @@ def default_policies() -> list[str]:
 
 
 def pair_path(folder: Path, pair: Pair) -> Path:
-    return folder / RECORDS_DIR / f"{pair[0]}__vs__{pair[1]}{RECORDS_SUFFIX}"
+    return folder / RECORDS_DIR / f"{pair[0]}{VERSUS}{pair[1]}{RECORDS_SUFFIX}"
+
+
+def policy_digest(name: str) -> str:
+    """What the policy `name` plays, as a SHA-256 hex digest: its kind, every key of its file
+    but the description, and the bytes of each file or folder a key names beside the policy
+    file (its weights, a checkpoint). New weights or an added `greedy = true` change it, a
+    reworded description does not; a filter suffix is not part of it (the name is)."""
+    spec = resolve_policy(name)
+    digest = hashlib.sha256(json.dumps([spec.kind, spec.params], sort_keys=True).encode())
+    for key, value in sorted(spec.params.items()):
+        if isinstance(value, str) and spec.file(key).exists():
+            path = spec.file(key)
+            files = sorted(p for p in path.rglob("*") if p.is_file()) if path.is_dir() else [path]
+            for file in files:
+                digest.update(file.relative_to(path.parent).as_posix().encode() + b"\0"
+                              + file.read_bytes())
+    return digest.hexdigest()
 
 
 def _read_pair(ladder: Ladder, path: Path, pair: Pair) -> list[GameRecord]:
@@ -125,28 +157,102 @@ def _read_pair(ladder: Ladder, path: Path, pair: Pair) -> list[GameRecord]:
         raise ValueError(f"{path}: game {unknown[0].game}: result {unknown[0].result!r} is not "
                          f"one of {list(RESULTS)}")
     seeds = sorted({r.seed for r in records})
-    if seeds != [ladder.seed] or sorted(r.game for r in records) != list(range(ladder.games)):
-        raise ValueError(
-            f"{path}: played with {len(records)} games, seed {', '.join(map(str, seeds))}; this "
-            f"ladder asks for {ladder.games} games a pair, seed {ladder.seed}: resume with the "
-            f"same --games and --seed, or use another --out (never mixed in one ladder)")
+    if seeds != [ladder.seed]:
+        raise ValueError(f"{path}: games of seed {', '.join(map(str, seeds))}, where this ladder "
+                         f"plays seed {ladder.seed}: resume with the --seed they were played "
+                         f"with, or use another --out (never mixed in one ladder)")
+    counts = Counter(r.game for r in records)
+    repeated = sorted(game for game, count in counts.items() if count > 1)
+    expected = set(range(ladder.games))
+    odd = sorted(set(counts) ^ expected)
+    if repeated or odd:
+        wrong = (f"game {repeated[0]} appears {counts[repeated[0]]} times" if repeated else
+                 f"game {odd[0]} is {'missing' if odd[0] in expected else 'not one of them'}")
+        raise ValueError(f"{path}: the pair plays games 0..{ladder.games - 1} and {wrong}: the "
+                         f"file is cut short or damaged; delete it to play the pair again")
     return sorted(records, key=lambda r: r.game)
 
 
-def played_pairs(ladder: Ladder, folder: Path) -> dict[Pair, list[GameRecord]]:
-    """The ladder's pairs already played in `folder`, every file checked before any game."""
-    return {pair: _read_pair(ladder, pair_path(folder, pair), pair)
-            for pair in ladder.pairs() if pair_path(folder, pair).is_file()}
+def _kept_settings(folder: Path) -> dict | None:
+    """The games, seed and policy digests (name -> digest) the folder's pairs were played
+    with: `played.json`, else `ladder.json`'s games and seed with no digests (module
+    docstring); None for a folder with neither."""
+    played, finished = folder / RECORDS_DIR / PLAYED_FILE, folder / LADDER_FILE
+    if played.is_file():
+        try:
+            kept = json.loads(played.read_text())
+            if not isinstance(kept["policies"], dict):
+                raise TypeError("policies is not a table of digests")
+            return {"games": int(kept["games"]), "seed": int(kept["seed"]),
+                    "policies": kept["policies"]}
+        except (ValueError, KeyError, TypeError) as exc:
+            raise ValueError(f"{played}: not a ladder's {PLAYED_FILE} ({exc!r}); delete it to "
+                             f"take the records as played with this ladder's settings and "
+                             f"policies") from None
+    if finished.is_file():
+        data, _ = read_ladder(finished)
+        return {"games": data["games_per_pair"], "seed": data["seed"], "policies": {}}
+    return None
+
+
+def _pair_files(folder: Path, name: str | None = None) -> list[Path]:
+    """The records files of the pairs played in `folder` (this ladder's or not; with `name`,
+    those of its pairs)."""
+    return sorted(path for path in (folder / RECORDS_DIR).glob(f"*{RECORDS_SUFFIX}")
+                  if not path.name.startswith(".") and (
+                      name is None or name in path.name.removesuffix(RECORDS_SUFFIX).split(VERSUS)))
+
+
+def _check_unchanged(folder: Path, kept: Mapping[str, str], digests: Mapping[str, str]) -> None:
+    """Refuse, naming it, a policy whose pairs in `folder` were played while its digest was
+    another than it is now."""
+    for name, digest in digests.items():
+        files = _pair_files(folder, name) if kept.get(name, digest) != digest else []
+        if files:
+            raise ValueError(
+                f"policy {name!r} changed since its pairs in {folder / RECORDS_DIR} were played "
+                f"(its policy file's keys or weights differ from those {PLAYED_FILE} keeps): its "
+                f"{len(files)} pair files ({files[0].name}, ...) rate play it no longer does; "
+                f"delete them to play its pairs again, or use another --out")
+
+
+def resume(ladder: Ladder, folder: Path) -> dict[Pair, list[GameRecord]]:
+    """The ladder's pairs already played in `folder`, every file checked before any game
+    (module docstring: what is refused); then `played.json` keeps this ladder's games, seed
+    and policy digests for the pairs still to play."""
+    asked = {"games": ladder.games, "seed": ladder.seed, "policies": {}}
+    kept = _kept_settings(folder) or asked
+    if (kept["games"], kept["seed"]) != (asked["games"], asked["seed"]) and _pair_files(folder):
+        raise ValueError(
+            f"{folder}: its pairs were played with --games {kept['games']} --seed "
+            f"{kept['seed']}, and this ladder asks for --games {ladder.games} --seed "
+            f"{ladder.seed}: resume with the same --games and --seed, or use another --out "
+            f"(never mixed in one ladder)")
+    played = {pair: _read_pair(ladder, pair_path(folder, pair), pair)
+              for pair in ladder.pairs() if pair_path(folder, pair).is_file()}
+    digests = {name: policy_digest(name) for name in ladder.policies}
+    _check_unchanged(folder, kept["policies"], digests)
+    path = folder / RECORDS_DIR / PLAYED_FILE
+    path.parent.mkdir(parents=True, exist_ok=True)
+    text = json.dumps({**asked, "policies": {**kept["policies"], **digests}}, indent=1,
+                      sort_keys=True)
+    _write_whole(path, lambda temporary: temporary.write_text(text + "\n"))
+    return played
+
+
+def _write_whole(path: Path, write: Callable[[Path], object]) -> None:
+    """`write` fills a temporary file beside `path` (a hidden name of the same kind), renamed
+    to `path` once written: an interrupted write leaves the old file, never half a new one."""
+    temporary = path.with_name(".writing-" + path.name)
+    write(temporary)
+    os.replace(temporary, path)
 
 
 def save_pair(folder: Path, pair: Pair, records: Sequence[GameRecord]) -> Path:
-    """Write the pair's records whole: a temporary file (same kind, hidden name), renamed once
-    written."""
+    """Write the pair's records whole (`_write_whole`)."""
     path = pair_path(folder, pair)
     path.parent.mkdir(parents=True, exist_ok=True)
-    temporary = path.with_name(".writing-" + path.name)
-    write_records(temporary, records)
-    os.replace(temporary, path)
+    _write_whole(path, lambda temporary: write_records(temporary, records))
     return path
 
 
@@ -210,16 +316,14 @@ def rate(ladder: Ladder, played: Mapping[Pair, Sequence[GameRecord]]) -> list[St
 
 def write_ladder(path: Path, ladder: Ladder, standings: Sequence[Standing],
                  played: Mapping[Pair, Sequence[GameRecord]]) -> None:
-    """The standings and each pair's results as JSON (a temporary file, renamed)."""
+    """The standings and each pair's results as JSON, written whole (`_write_whole`)."""
     pairs = [{"team": a, "vs": b, "games": int(row.sum()),
               **{result: int(count) for result, count in zip(RESULTS, row, strict=True)}}
              for (a, b), row in zip(ladder.pairs(), _results(ladder, played), strict=True)]
     data = {"policies": list(ladder.policies), "games_per_pair": ladder.games,
             "seed": ladder.seed, "bootstrap": ladder.bootstrap,
             "standings": [asdict(s) for s in standings], "pairs": pairs}
-    temporary = path.with_name(path.name + ".tmp")
-    temporary.write_text(json.dumps(data, indent=1) + "\n")
-    os.replace(temporary, path)
+    _write_whole(path, lambda temporary: temporary.write_text(json.dumps(data, indent=1) + "\n"))
 
 
 def read_ladder(path: Path) -> tuple[dict, list[Standing]]:

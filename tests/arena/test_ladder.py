@@ -1,6 +1,7 @@
 """The ladder: which pairs play, the fit on records whose outcome is known (order, Elo's scale,
 a tie as half a win, reproducible intervals), and the command: a small real ladder that
-resumes, adds only a new policy's pairs, and refuses records made with other games or seed."""
+resumes, adds only a new policy's pairs, and refuses records made with other games or seed,
+damaged records and the pairs of a policy that changed since they were played."""
 
 from __future__ import annotations
 
@@ -15,9 +16,12 @@ from PIL import Image
 from rllib_pommer.agents.registry import policy_names
 from rllib_pommer.arena.ladder import (
     LADDER_FILE,
+    PLAYED_FILE,
+    RECORDS_DIR,
     Ladder,
     default_policies,
     pair_path,
+    policy_digest,
     rate,
 )
 from rllib_pommer.arena.match import play_match
@@ -96,7 +100,13 @@ def test_rating_needs_every_pair():
 
 
 def _files(folder) -> dict:
-    return {path.name: path.read_bytes() for path in sorted((folder / "records").iterdir())}
+    """The pairs' records files in the ladder's folder, by name."""
+    return {path.name: path.read_bytes()
+            for path in sorted((folder / RECORDS_DIR).glob("*.jsonl.gz"))}
+
+
+def _played(folder) -> dict:
+    return json.loads((folder / RECORDS_DIR / PLAYED_FILE).read_text())
 
 
 def test_a_ladder_plays_resumes_and_adds_only_new_pairs(tmp_path, capsys):
@@ -113,6 +123,8 @@ def test_a_ladder_plays_resumes_and_adds_only_new_pairs(tmp_path, capsys):
     ladder = Ladder(("static", "simple_nobomb", "simple"), 4)
     write_records(tmp_path / "again.jsonl.gz", play_match(ladder.match(("simple", "static")), 1))
     assert (tmp_path / "again.jsonl.gz").read_bytes() == files["simple__vs__static.jsonl.gz"]
+    assert _played(out) == {"games": 4, "seed": 0, "policies": {
+        name: policy_digest(name) for name in ("simple", "simple_nobomb", "static")}}
     data = json.loads((out / LADDER_FILE).read_text())
     assert (data["games_per_pair"], data["seed"], data["bootstrap"]) == (4, 0, 50)
     assert sorted(s["policy"] for s in data["standings"]) == ["simple", "simple_nobomb", "static"]
@@ -137,22 +149,105 @@ def test_a_ladder_plays_resumes_and_adds_only_new_pairs(tmp_path, capsys):
     assert len(grown) == 6 and {name: grown[name] for name in files} == files
 
 
+LADDER = ["--policies", "static,simple_nobomb", "--games", "4", "--workers", "1",
+          "--bootstrap", "20"]
+
+
 @pytest.mark.parametrize("change, told", [
-    (["--games", "6"], "played with 4 games, seed 0; this ladder asks for 6 games a pair, seed 0"),
-    (["--seed", "1"], "played with 4 games, seed 0; this ladder asks for 4 games a pair, seed 1"),
+    (["--games", "6"], "were played with --games 4 --seed 0, and this ladder asks for --games 6 "
+                       "--seed 0: resume with the same --games and --seed"),
+    (["--seed", "1"], "were played with --games 4 --seed 0, and this ladder asks for --games 4 "
+                      "--seed 1"),
 ])
 def test_records_of_other_games_or_seed_are_refused_not_mixed(tmp_path, capsys, change, told):
     out = tmp_path / "ladder"
-    pair = ("simple_nobomb", "static")
-    path = pair_path(out, pair)
-    path.parent.mkdir(parents=True)
-    write_records(path, games(*pair, ["tie"] * 4))
-    before = path.read_bytes()
-    argv = ["--policies", "static,simple_nobomb", "--games", "4", "--out", str(out), *change]
-    assert main(argv) == 2
+    assert main([*LADDER, "--out", str(out)]) == 0
+    before, played = _files(out), _played(out)
+    capsys.readouterr()
+    assert main([*LADDER, "--out", str(out), *change]) == 2
     err = capsys.readouterr().err
-    assert err.count("error:") == 1 and told in err and str(path) in err
-    assert path.read_bytes() == before and not (out / LADDER_FILE).exists()
+    assert err.count("error:") == 1 and told in err and str(out) in err
+    assert _files(out) == before and _played(out) == played
+
+
+def test_a_pair_file_of_another_seed_is_refused_naming_it(tmp_path, capsys):
+    """A folder without played.json or ladder.json: each pair file shows its own seed."""
+    out = tmp_path / "ladder"
+    path = pair_path(out, ("simple_nobomb", "static"))
+    path.parent.mkdir(parents=True)
+    write_records(path, games("simple_nobomb", "static", ["tie"] * 4))
+    assert main([*LADDER, "--seed", "1", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("error:") == 1 and f"{path}: games of seed 0, where this ladder plays " \
+        f"seed 1: resume with the --seed they were played with" in err
+
+
+@pytest.mark.parametrize("rows, told", [
+    (lambda rows: rows[:1] + rows, "and game 0 appears 2 times: the file is cut short or "
+                                   "damaged; delete it to play the pair again"),
+    (lambda rows: rows[:3], "and game 3 is missing: the file is cut short or damaged"),
+])
+def test_a_pair_file_with_a_game_repeated_or_missing_is_damaged(tmp_path, capsys, rows, told):
+    """The folder says which games its pairs play, so a file that lacks one is cut short, not
+    a ladder of other settings."""
+    out = tmp_path / "ladder"
+    assert main([*LADDER, "--out", str(out)]) == 0
+    path = pair_path(out, ("simple_nobomb", "static"))
+    lines = gzip.decompress(path.read_bytes()).decode().splitlines(keepends=True)
+    path.write_bytes(gzip.compress("".join(rows(lines)).encode()))
+    capsys.readouterr()
+    assert main([*LADDER, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("error:") == 1 and f"{path}: the pair plays games 0..3 {told}" in err
+
+
+def _fake_arena(monkeypatch, interrupt_at: list[int] | None = None) -> list:
+    """The ladder's matches replaced by games of known results; the pairs played, listed.
+    Ctrl-C comes when `interrupt_at[0]` pairs were played."""
+    played = []
+
+    def arena(spec, workers, progress):
+        if interrupt_at and len(played) == interrupt_at[0]:
+            raise KeyboardInterrupt
+        played.append((spec.team, spec.vs))
+        return games(spec.team, spec.vs, ["win", "tie"] * (spec.games // 2), spec.seed)
+
+    monkeypatch.setattr("rllib_pommer.ladder.play_match", arena)
+    return played
+
+
+def test_the_pairs_of_a_changed_policy_are_refused_naming_it(tmp_path, capsys, monkeypatch):
+    """New weights or another way of acting is another policy: its kept games are refused
+    (never rated as its play); a reworded description changes nothing; once its pair files
+    are deleted it plays them again."""
+    policies = tmp_path / "policies"
+    (policies / "mine").mkdir(parents=True)
+    (policies / "static.toml").write_text('kind = "static"\n')
+    (policies / "mine" / "pi.pt").write_bytes(b"weights one")
+    mine = policies / "mine.toml"
+    mine.write_text('kind = "learned"\nweights = "mine/pi.pt"\ndescription = "mine"\n')
+    monkeypatch.setenv("RLLIB_POMMER_POLICIES", str(policies))
+    played = _fake_arena(monkeypatch)
+    out = tmp_path / "ladder"
+    argv = ["--policies", "mine,static", "--games", "2", "--bootstrap", "20", "--out", str(out)]
+    assert main(argv) == 0 and played == [("mine", "static")]
+
+    mine.write_text('kind = "learned"\nweights = "mine/pi.pt"\ndescription = "reworded"\n')
+    assert main(argv) == 0 and len(played) == 1
+    for change in (lambda: (policies / "mine" / "pi.pt").write_bytes(b"weights two"),
+                   lambda: mine.write_text(mine.read_text() + "greedy = true\n")):
+        change()
+        capsys.readouterr()
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert err.count("error:") == 1 and "policy 'mine' changed since its pairs in" in err
+        assert "its 1 pair files (mine__vs__static.jsonl.gz, ...)" in err
+        assert len(played) == 1
+
+    pair_path(out, ("mine", "static")).unlink()
+    assert main(argv) == 0 and played == [("mine", "static")] * 2
+    assert main(argv) == 0 and len(played) == 2
+    assert _played(out)["policies"]["mine"] == policy_digest("mine")
 
 
 def test_records_of_another_match_in_a_pairs_file_are_refused(tmp_path, capsys):
@@ -189,20 +284,13 @@ def test_an_interrupted_ladder_keeps_its_finished_pairs_and_resumes(tmp_path, ca
                                                                     monkeypatch):
     """Ctrl-C during the second pair: the first pair's file stays whole, the next run plays the
     other two pairs only."""
-    played, interrupt_at = [], [1]
-
-    def arena(spec, workers, progress):
-        if len(played) == interrupt_at[0]:
-            raise KeyboardInterrupt
-        played.append((spec.team, spec.vs))
-        return games(spec.team, spec.vs, ["win", "tie"] * (spec.games // 2), spec.seed)
-
-    monkeypatch.setattr("rllib_pommer.ladder.play_match", arena)
+    interrupt_at = [1]
+    played = _fake_arena(monkeypatch, interrupt_at)
     argv = ["--policies", "random,simple,static", "--games", "4", "--bootstrap", "20",
             "--out", str(tmp_path)]
     assert main(argv) == 130
     assert "interrupted: the pairs finished are kept" in capsys.readouterr().err
-    assert [p.name for p in (tmp_path / "records").iterdir()] == ["random__vs__simple.jsonl.gz"]
+    assert list(_files(tmp_path)) == ["random__vs__simple.jsonl.gz"]
     assert not (tmp_path / LADDER_FILE).exists()
     interrupt_at[0] = -1
     assert main(argv) == 0
