@@ -37,6 +37,7 @@ from .base import Agent
 from .http_agent import HttpAgent
 from .jitter import JitterCorrection
 from .scripted import RULES
+from .search import SearchAgent
 from .speaker import Speaker
 
 if sys.version_info >= (3, 11):
@@ -92,7 +93,8 @@ class Kind:
     plugin: the module that registers `build` (torch or Ray side), imported when first needed.
     keys:   the keys its files may hold beyond kind and description; None: the factory checks.
     fixed:  the fixed RLlib module that plays it in a curriculum, "scripted" (the rule of
-            `scripted.RULES`) or "net" (a frozen PommerNet); None: it cannot be one.
+            `scripted.RULES`), "search" (`search.search_actions` at the file's effort) or "net"
+            (a frozen PommerNet); None: it cannot be one.
     """
 
     build: Factory | None
@@ -108,6 +110,8 @@ def _scripted(agent: type) -> Factory:
 KINDS: dict[str, Kind] = {
     **{kind: Kind(_scripted(rule.agent), fixed="scripted") for kind, rule in RULES.items()},
     "http": Kind(HttpAgent.from_spec, keys=None),  # http_agent.py checks its own keys
+    "search": Kind(SearchAgent.from_spec, keys={"depth": (int, False), "horizon": (int, False),
+                                               "recall": (int, False)}, fixed="search"),
     "learned": Kind(None, "rllib_pommer.imitation.learned",
                     {"weights": (str, True), "greedy": (bool, False),
                      "temperature": (float, False)}, "net"),

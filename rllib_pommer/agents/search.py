@@ -87,12 +87,15 @@ DOOMED = -1e7  # no way out even if nobody lays another bomb
 CORNERED = -5e3  # no way out if every enemy lays a bomb where it stands now
 ROOM = 10.0  # per cell it can be on at the horizon of the pessimistic scenario, up to ROOM_CAP
 ROOM_CAP = 8
+IN_BLAST = -50.0  # its cell burns in the plain scenario's first step; less if later
+URGENT = 4  # ... and nothing if it burns this many steps or more after the leaf
 KILL = 2e3  # per enemy dead, or without a way out of the plain scenario
 TEAMMATE_LOST = -3e3  # the teammate has no way out of the plain scenario
 WOOD_BURNT = 15.0  # per wooden cell the agent's new bombs burn that no older bomb does
 POWER_UP = 60.0  # per power-up picked up
 HUNT = 6.0  # per unit of path cost to the nearest enemy
 WOOD_COST, BOMB_COST = 4, 2  # path cost of entering a wooden cell, a bomb's cell; others 1
+ENEMY_WALK = 2  # steps an enemy may walk in the pessimistic scenario, its body blocking
 STALE = 10  # with no enemy to head for: fogged cells seen at most this long after the oldest
 
 
@@ -227,16 +230,20 @@ def _leaf_score(lb, la, lbo, lf, li, lm, lr, root_alive, me, game_type, depth, h
         n_cached += 1
         cache_keys[slot] = key
         bombers = np.zeros(NUM_AGENTS, np.bool_)
-        play_scenario(lb, la, lbo, lf, li, lm, lr, me, bombers, cache_plain_fire[slot],
+        play_scenario(lb, la, lbo, lf, li, lm, lr, me, bombers, 0, 0, cache_plain_fire[slot],
                       cache_plain_blocked[slot])
         for a in range(NUM_AGENTS):
             bombers[a] = la[a, A_ALIVE] != 0 and _is_enemy(me, a, game_type)
-        play_scenario(lb, la, lbo, lf, li, lm, lr, me, bombers, cache_pess_fire[slot],
-                      cache_pess_blocked[slot])
+        play_scenario(lb, la, lbo, lf, li, lm, lr, me, bombers, ENEMY_WALK, depth,
+                      cache_pess_fire[slot], cache_pess_blocked[slot])
     plain_fire, plain_blocked = cache_plain_fire[slot], cache_plain_blocked[slot]
     score = 0.0
     if escape_cells(plain_fire, plain_blocked, mr, mc, 1) == 0:
         score += DOOMED
+    for t in range(min(URGENT, plain_fire.shape[0])):
+        if plain_fire[t, mr, mc]:
+            score += IN_BLAST * (URGENT - t) / URGENT
+            break
     room = escape_cells(cache_pess_fire[slot], cache_pess_blocked[slot], mr, mc, ROOM_CAP)
     score += CORNERED if room == 0 else ROOM * room
     for a in range(NUM_AGENTS):
@@ -251,9 +258,10 @@ def _leaf_score(lb, la, lbo, lf, li, lm, lr, root_alive, me, game_type, depth, h
 
 
 @njit(cache=True)
-def decide(board, agents, bombs, flames, items, meta, radio, me, game_type, depth, horizon, hunt,
-           rng, row):
-    """The action of the searching agent `me` in the believed state (module docstring)."""
+def root_values(board, agents, bombs, flames, items, meta, radio, me, game_type, depth, horizon,
+                hunt):
+    """The value of each of the six actions of `me` in the believed state: the best score of
+    the leaves below it (module docstring); -inf for an action that plays as Stop does."""
     size = board.shape[0]
     levels = depth + 1
     lb = np.empty((levels,) + board.shape, board.dtype)
@@ -322,6 +330,16 @@ def decide(board, agents, bombs, flames, items, meta, radio, me, game_type, dept
                 pess_blocked, n_cached)
             score += gain[nxt]
         value[chosen[0]] = max(value[chosen[0]], score)
+    return value
+
+
+@njit(cache=True)
+def decide(board, agents, bombs, flames, items, meta, radio, me, game_type, depth, horizon, hunt,
+           rng, row):
+    """The action of the searching agent `me` in the believed state: the best of
+    `root_values`, ties broken by a uniform draw below 1 added to each from stream `row`."""
+    value = root_values(board, agents, bombs, flames, items, meta, radio, me, game_type, depth,
+                        horizon, hunt)
     best = STOP
     best_value = -np.inf
     for action in range(NUM_ACTIONS):

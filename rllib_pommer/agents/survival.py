@@ -3,7 +3,8 @@ cells an agent could occupy at each of its steps (docs/search.md §3).
 
 `play_scenario` copies a believed state, takes the searching agent off the board (its own moves
 are what the search varies, so the scenario does not depend on them), lets the agents in
-`bombers` lay a bomb where they stand on the first step and all agents stand still after, and
+`bombers` lay a bomb where they stand on the first step and all agents stand still after (a
+bomber's body is also assumed on any free cell it could have walked to, up to a few steps), and
 records for every step which cells burn and which block a walker (walls, wood, bombs, agents).
 `escape_cells` walks that record forward from a start cell: at each step the agent may stay or
 step to a free neighbour, and dies on a burning cell; it returns how many cells it can be on at
@@ -21,16 +22,55 @@ from ..game.step import step_game
 
 PASSAGE, RIGID, WOOD, BOMB, FLAMES, AGENT0 = (
     int(i) for i in (Item.PASSAGE, Item.RIGID, Item.WOOD, Item.BOMB, Item.FLAMES, Item.AGENT0))
+EXTRA_BOMB, KICK = int(Item.EXTRA_BOMB), int(Item.KICK)
 STOP, BOMB_ACTION = int(Action.STOP), int(Action.BOMB)
 NEIGHBOURS = np.array([[-1, 0], [1, 0], [0, -1], [0, 1]], np.int64)
 NO_CAP = 1 << 20
 
 
 @njit(cache=True)
-def play_scenario(board, agents, bombs, flames, items, meta, radio, me, bombers, fire, blocked):
-    """Fill `fire` and `blocked` (H, S, S) bool for H = fire.shape[0] steps of the scenario of
-    the module docstring; the state arrays are left unchanged."""
+def _walk_steps(board, row, col, limit, out):
+    """`out` (S, S): the fewest steps from (row, col) to each cell over free cells (Passage,
+    power-ups) within `limit` steps, else a number above `limit`."""
     size = board.shape[0]
+    out[:] = limit + 1
+    out[row, col] = 0
+    queue = np.empty((size * size, 2), np.int64)
+    queue[0, 0], queue[0, 1] = row, col
+    head, tail = 0, 1
+    while head < tail:
+        r, c = queue[head, 0], queue[head, 1]
+        head += 1
+        if out[r, c] >= limit:
+            continue
+        for k in range(4):
+            rr, cc = r + NEIGHBOURS[k, 0], c + NEIGHBOURS[k, 1]
+            if not (0 <= rr < size and 0 <= cc < size) or out[rr, cc] <= limit:
+                continue
+            code = board[rr, cc]
+            if code == PASSAGE or EXTRA_BOMB <= code <= KICK:
+                out[rr, cc] = out[r, c] + 1
+                queue[tail, 0], queue[tail, 1] = rr, cc
+                tail += 1
+
+
+@njit(cache=True)
+def play_scenario(board, agents, bombs, flames, items, meta, radio, me, bombers, walk, head_start,
+                  fire, blocked):
+    """Fill `fire` and `blocked` (H, S, S) bool for H = fire.shape[0] steps of the scenario of
+    the module docstring; the state arrays are left unchanged. Each bomber may also stand on any
+    free cell within `walk` steps of it that it can have reached by then, having had
+    `head_start` steps before the scenario began: those cells block too."""
+    size = board.shape[0]
+    near = np.zeros((size, size), np.int64)
+    ghost = np.full((size, size), 1 << 20, np.int64)  # from which step a bomber may stand there
+    for a in range(NUM_AGENTS):
+        if bombers[a] and agents[a, A_ALIVE] != 0 and walk > 0:
+            _walk_steps(board, agents[a, A_ROW], agents[a, A_COL], walk, near)
+            for r in range(size):
+                for c in range(size):
+                    if near[r, c] <= walk:
+                        ghost[r, c] = min(ghost[r, c], near[r, c])
     s_board, s_agents, s_bombs = board.copy(), agents.copy(), bombs.copy()
     s_flames, s_items, s_meta, s_radio = flames.copy(), items.copy(), meta.copy(), radio.copy()
     if s_agents[me, A_ALIVE] != 0:
@@ -52,7 +92,8 @@ def play_scenario(board, agents, bombs, flames, items, meta, radio, me, bombers,
             for c in range(size):
                 code = s_board[r, c]
                 fire[t, r, c] = code == FLAMES
-                blocked[t, r, c] = code == RIGID or code == WOOD or code == BOMB or code >= AGENT0
+                blocked[t, r, c] = (code == RIGID or code == WOOD or code == BOMB
+                                    or code >= AGENT0 or ghost[r, c] <= t + head_start)
 
 
 @njit(cache=True)

@@ -158,6 +158,11 @@ class FrozenNetModule(TorchRLModule):
 def fixed_module_spec(policy: str) -> RLModuleSpec:
     """The module spec playing policy `policy` (validated by the curriculum loader)."""
     kind = resolve_policy(policy).kind
+    if KINDS[kind].fixed == "search":
+        from .search_module import SearchModule  # which imports this module's seeding
+
+        return RLModuleSpec(module_class=SearchModule,
+                            model_config={"policy": policy, "max_seq_len": MAX_SEQ_LEN})
     if KINDS[kind].fixed == "scripted":
         return RLModuleSpec(module_class=ScriptedModule,
                             model_config={"kind": kind, "max_seq_len": MAX_SEQ_LEN})

@@ -15,8 +15,8 @@ from rllib_pommer.agents.scripted import SmartRandom, StaticAgent, SuicideTeamma
 from rllib_pommer.agents.simple import SimpleAgent
 
 SHIPPED = ["imitation", "imitation_sampling", "imitation_v1", "imitation_v2", "ppo",
-           "ppo_cautious", "ppo_dual_clip", "ppo_league", "ppo_team", "random", "simple",
-           "simple_nobomb", "smart_random", "static", "suicide"]
+           "ppo_cautious", "ppo_dual_clip", "ppo_league", "ppo_league_v1", "ppo_team", "random",
+           "search", "search_fast", "simple", "simple_nobomb", "smart_random", "static", "suicide"]
 
 
 def layers(agent):
