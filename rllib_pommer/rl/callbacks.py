@@ -28,7 +28,10 @@ sums over the iteration); under prioritized matchmaking these go into the matchm
 the learner after each iteration (rl/league.py), the league's weights follow from it
 (rl/matchmaking.py) and reach every env runner's mapping in place, and the result's
 `matchmaking` entry gives each member's share of the coming games, estimated win rate and
-decayed games.
+decayed games. A league with an exploiter (rl/league.py) gives it a seat cycle among the members
+of its self-play stages; its games against the learner go into its own gate after each
+iteration (the result's `league` entry has an `exploiter` entry: its block and the slot it
+filled), and its pi is frozen with the learner's in a value warm-up.
 
 The iteration that ends a stage asks Tune for a checkpoint (`should_checkpoint`) and names the
 stage (`curriculum/ended_stage`), so the state at every stage's end is saved (training.py keeps
@@ -52,9 +55,17 @@ from ..game.constants import Action
 from ..game.kills import deaths_by_cause, kills_of_team
 from .connectors import FILTERS_KEY, move_of
 from .curriculum import Curriculum
-from .league import MATCHMAKING_MODULE, gate_step, members, next_slot, read_book
+from .league import (
+    MATCHMAKING_MODULE,
+    exploiter_step,
+    gate_step,
+    members,
+    next_slot,
+    read_book,
+)
 from .mapping import SeatMapping
 from .matchmaking import priority
+from .names import EXPLOITER
 from .rl_module import LEARNER
 
 
@@ -83,10 +94,11 @@ def _on_learner(algorithm, func):
     return next(iter(algorithm.learner_group.foreach_learner(func))).get()
 
 
-def _push_snapshots(algorithm, slots) -> None:
-    """The learner's copies of snapshot `slots` onto every env runner. Not RLlib's weight sync,
-    which an env runner skips when the learner's weights sequence number has not moved since
-    the last sync (a slot filled after an update has the same number)."""
+def _push_modules(algorithm, slots) -> None:
+    """The learner's copies of modules `slots` (snapshots, a restarted exploiter) onto every env
+    runner. Not RLlib's weight sync, which an env runner skips when the learner's weights
+    sequence number has not moved since the last sync (a slot filled after an update has the
+    same number), and which ran before the callback changed them."""
     for slot in slots:
         state = _on_learner(algorithm, lambda learner, slot=slot: learner.module[slot].get_state())
         algorithm.env_runner_group.foreach_env_runner(
@@ -157,7 +169,7 @@ class CurriculumCallback(RLlibCallback):
         stage = self.curriculum.stages[index]
         opponent = stage.opponent
         if stage.self_play:
-            opponent = (*stage.opponents, *members(self._book(algorithm)))
+            opponent = (*stage.opponents, *self._exploiter(), *members(self._book(algorithm)))
         weights = None
         if self._matched(stage):
             league, records = self.curriculum.league, self._records(algorithm)
@@ -168,9 +180,16 @@ class CurriculumCallback(RLlibCallback):
                         "jitter": stage.jitter}
         algorithm.env_runner_group.foreach_env_runner(
             lambda runner: _push_stage(runner, mapping, env_settings), local_env_runner=True)
-        algorithm.learner_group.foreach_learner(
-            lambda learner: learner.module[LEARNER].set_pi_frozen(stage.freeze_pi))
+        for module_id in (LEARNER, *self._exploiter()):
+            algorithm.learner_group.foreach_learner(
+                lambda learner, module_id=module_id:
+                learner.module[module_id].set_pi_frozen(stage.freeze_pi))
         return index
+
+    def _exploiter(self) -> tuple[str, ...]:
+        """The league's exploiter module, if it has one (league.py)."""
+        league = self.curriculum.league
+        return (EXPLOITER,) if league is not None and league.exploiter else ()
 
     def _lifetime_episodes(self, algorithm) -> int:
         return int(algorithm.metrics.peek((ENV_RUNNER_RESULTS, NUM_EPISODES_LIFETIME), default=0))
@@ -186,7 +205,7 @@ class CurriculumCallback(RLlibCallback):
         def set_state_and_stage(state):
             set_state(state)
             if self.curriculum.league:
-                _push_snapshots(algorithm, members(self._book(algorithm)))
+                _push_modules(algorithm, members(self._book(algorithm)))
             self.apply_stage(algorithm, self._lifetime_episodes(algorithm))
         algorithm.set_state = set_state_and_stage
 
@@ -217,22 +236,42 @@ class CurriculumCallback(RLlibCallback):
                 for name, weight in zip(opponent, weights, strict=True)}
 
     def _gate(self, algorithm, runners: dict, episodes: int) -> dict:
-        """The iteration's league games into the gate; a filled slot goes to the env runners
-        (and, under prioritized matchmaking, starts a new record)."""
+        """The iteration's league games into the gate, and the exploiter's games against the
+        learner into its own; a filled slot goes to the env runners (and, under prioritized
+        matchmaking, starts a new record), and so does a restarted exploiter."""
         league = self.curriculum.league
         wins, games = _count(runners, "league_wins"), _count(runners, "league_games")
         filled = _on_learner(
             algorithm, lambda learner: gate_step(learner, league, wins, games, episodes))
-        if filled:
-            if league.prioritized:
-                algorithm.learner_group.foreach_learner(
-                    lambda learner: learner.module[MATCHMAKING_MODULE].forget(filled))
-            _push_snapshots(algorithm, [filled])
+        self._new_member(algorithm, filled)
+        entry = {}
+        if league.exploiter:  # its wins are the learner's losses against it
+            wins, games = (_count(runners, f"league_{key}_vs_{EXPLOITER}")
+                           for key in ("losses", "games"))
+            joined = _on_learner(algorithm, lambda learner: exploiter_step(
+                learner, league, wins, games, episodes))
+            self._new_member(algorithm, joined)
+            if joined:
+                _push_modules(algorithm, [EXPLOITER])  # restarted from the learner
+            block_wins, block_games = _on_learner(
+                algorithm, lambda learner: learner.module[MATCHMAKING_MODULE].exploiter.tolist())
+            entry["exploiter"] = {"filled": joined, "gate_wins": block_wins,
+                                  "gate_games": block_games}
         book = self._book(algorithm)
         block = next_slot(book)
         return {"snapshots": len(members(book)), "filled": filled, "gate_games": block.games,
                 "gate_win_rate": block.wins / block.games if block.games else float("nan"),
-                "members": list(members(book))}
+                "members": list(members(book)), **entry}
+
+    def _new_member(self, algorithm, slot: str | None) -> None:
+        """A slot just filled: a new record under prioritized matchmaking, and its weights on
+        every env runner."""
+        if slot is None:
+            return
+        if self.curriculum.league.prioritized:
+            algorithm.learner_group.foreach_learner(
+                lambda learner: learner.module[MATCHMAKING_MODULE].forget(slot))
+        _push_modules(algorithm, [slot])
 
     def on_train_result(self, *, algorithm, result, **kwargs) -> None:
         runners = result[ENV_RUNNER_RESULTS]

@@ -58,6 +58,7 @@ from .fixed_modules import fixed_module_spec
 from .league import snapshot_specs
 from .learner import DUAL_CLIP_KEY, PommerPPOLearner
 from .mapping import SeatMapping
+from .names import EXPLOITER
 from .rl_module import LEARNER, PommerPPOModule
 from .settings import PPOSettings
 
@@ -85,7 +86,7 @@ def check_weights(path: Path, part: str = "pi", radio: bool = False) -> Path:
     resolved, once it has loaded into the network the learner builds (a PommerNet, with `radio`
     a RadioNet): a missing, cut short or foreign file is named here, before Ray starts, not deep
     inside a Ray actor."""
-    if not Path(path).is_file():
+    if not Path(path).exists():
         what, source = WEIGHTS_HINTS[part]
         raise ValueError(f"{what} not found: {path} ({source})")
     load_policy_net(path, NET_OUTPUTS[part], radio=radio)
@@ -117,6 +118,10 @@ def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None
     if radio:  # only then, as vf_weights (the learner module reads it from the spaces)
         env_config["game"] = "radio"
     modules = {LEARNER: RLModuleSpec(module_class=PommerPPOModule, model_config=model_config)}
+    trained = [LEARNER]
+    if curriculum.league and curriculum.league.exploiter:  # the same start (league.py)
+        modules[EXPLOITER] = RLModuleSpec(module_class=PommerPPOModule, model_config=model_config)
+        trained.append(EXPLOITER)
     modules |= {name: fixed_module_spec(name) for name in curriculum.policies()}
     if curriculum.league:  # built empty; the callback's gate fills them (league.py)
         modules |= snapshot_specs(curriculum.league, curriculum.league_members())
@@ -133,7 +138,7 @@ def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None
         .multi_agent(
             policies=set(modules),
             policy_mapping_fn=SeatMapping(0, first.teammate, first.opponent),
-            policies_to_train=[LEARNER])
+            policies_to_train=trained)
         .rl_module(rl_module_spec=MultiRLModuleSpec(rl_module_specs=modules))
         .training(
             entropy_coeff=ppo.entropy_coeff, clip_param=ppo.clip_param,

@@ -58,7 +58,7 @@ from ..game.constants import PRESETS, TEAM_PRESET, has_teams
 from ..game.rewards import REWARD_MODES
 from ..util.shipped import data_dir
 from .matchmaking import MATCHMAKING
-from .names import LEARNER
+from .names import EXPLOITER, LEARNER
 from .settings import LeagueSettings, PPOSettings
 
 if sys.version_info >= (3, 11):
@@ -154,11 +154,14 @@ class Curriculum:
 
     def league_members(self) -> list[str]:
         """Everyone the matchmaking book keeps a record against (rl/league.py): every stage's
-        opponents in first-use order, then the snapshot slots."""
+        opponents in first-use order, then the exploiter if there is one, then the snapshot
+        slots."""
         names: list[str] = []
         for stage in self.stages:
             names += [name for name in stage.opponents if name not in names]
-        return names + (self.league.slot_ids() if self.league else [])
+        if self.league is None:
+            return names
+        return names + ([EXPLOITER] if self.league.exploiter else []) + self.league.slot_ids()
 
 
 def curriculum_dir() -> Path:

@@ -17,6 +17,20 @@ gate's current block toward filling that slot. RLlib checkpoints every module's 
 league's members, their weights and the gate survive `--resume`, `--pack` and a move to another
 clone without any file of its own; the callback keeps no state and reads the book from the
 learner's modules whenever it needs it.
+
+Prioritized matchmaking (rl/matchmaking.py) keeps its book the same way: `MatchmakingModule`, a
+module that never plays, holds the learner's decayed wins, losses and ties against every league
+member (`Curriculum.league_members`); it exists only in a curriculum that asks for prioritized
+matchmaking or an exploiter, so runs started before it restore unchanged. A slot filled with a
+new snapshot starts a new record.
+
+An exploiter (AlphaStar's main exploiter) is a second trained module, `exploiter`, built like the
+learner from the same weights, that plays the learner and no one else: it is a member of the
+learner's league, and so the learner's games against it train both. Its wins against the
+learner are counted in blocks (the book's `exploiter` tally); a block of `exploiter_gate_games`
+won at `exploiter_gate_win` or more copies its pi into the next snapshot slot, where it stays in
+the learner's league as a frozen member, and the exploiter starts again from the learner's pi
+and vf as they are then, with fresh optimizer moments, to look for the next weakness.
 """
 
 from __future__ import annotations
@@ -31,7 +45,7 @@ from ray.rllib.core.rl_module.torch import TorchRLModule
 
 from ..imitation.network import PommerNet
 from .matchmaking import Record
-from .names import LEARNER
+from .names import EXPLOITER, LEARNER
 from .settings import LeagueSettings
 
 MATCHMAKING_MODULE = "matchmaking"
@@ -79,22 +93,25 @@ class SnapshotModule(TorchRLModule):
 
 class MatchmakingModule(RLModule):
     """The matchmaking book (module docstring): `results[i]` holds the learner's decayed wins,
-    losses and ties against member i of `model_config["members"]`. It plays no seat and has no
-    parameters (a plain RLModule, as the scripted ones: the learner builds it no optimizer);
-    its state is the array."""
+    losses and ties against member i of `model_config["members"]`, and `exploiter` the
+    exploiter's block (wins, games against the learner). It plays no seat and has no parameters
+    (a plain RLModule, as the scripted ones: the learner builds it no optimizer); its state is
+    the arrays."""
 
     def setup(self):
         self.members = list(self.model_config["members"])
         self.results = np.zeros((len(self.members), 3), np.float64)
+        self.exploiter = np.zeros(2, np.int64)
 
     def _forward(self, batch, **kwargs):
         raise RuntimeError("the matchmaking book plays no seat")
 
     def get_state(self, *args, **kwargs) -> dict:
-        return {"results": self.results.copy()}
+        return {"results": self.results.copy(), "exploiter": self.exploiter.copy()}
 
     def set_state(self, state: dict) -> None:
         self.results = np.array(state["results"], np.float64)
+        self.exploiter = np.array(state.get("exploiter", (0, 0)), np.int64)
 
     def records(self) -> dict[str, Record]:
         return {name: Record(*(float(n) for n in row))
@@ -112,9 +129,10 @@ class MatchmakingModule(RLModule):
 
 
 def snapshot_specs(settings: LeagueSettings, members: list[str]) -> dict[str, RLModuleSpec]:
-    """The slots' modules, and the matchmaking book's under prioritized matchmaking."""
+    """The slots' modules, and the matchmaking book's under prioritized matchmaking or with an
+    exploiter."""
     specs = {slot: RLModuleSpec(module_class=SnapshotModule) for slot in settings.slot_ids()}
-    if settings.prioritized:
+    if settings.prioritized or settings.exploiter:
         specs[MATCHMAKING_MODULE] = RLModuleSpec(module_class=MatchmakingModule,
                                                  model_config={"members": list(members)})
     return specs
@@ -154,6 +172,29 @@ def gate_step(learner, settings: LeagueSettings, wins: int, games: int,
         return slot.module_id
     module.tally.zero_()
     return None
+
+
+def exploiter_step(learner, settings: LeagueSettings, wins: int, games: int,
+                   episodes: int) -> str | None:
+    """Count the exploiter's `wins` of `games` against the learner into its block (run on a
+    learner); when the block is complete and won at `exploiter_gate_win` or more, copy the
+    exploiter's pi into the next snapshot slot and start the exploiter again from the learner
+    (module docstring). Returns the filled slot's id, or None."""
+    book = learner.module[MATCHMAKING_MODULE]
+    book.exploiter += np.array([wins, games], np.int64)
+    won, played = (int(n) for n in book.exploiter)
+    if played < settings.exploiter_gate_games:
+        return None
+    book.exploiter[:] = 0
+    if won / played < settings.exploiter_gate_win:
+        return None
+    slot = next_slot(read_book(learner, settings)).module_id
+    exploiter, main = learner.module[EXPLOITER], learner.module[LEARNER]
+    learner.module[slot].fill(exploiter.pi, episodes)
+    exploiter.pi.load_state_dict(main.pi.state_dict())
+    exploiter.vf.load_state_dict(main.vf.state_dict())
+    learner.get_optimizer(EXPLOITER).state.clear()  # Adam's moments belong to the old weights
+    return slot
 
 
 def describe(book: list[Slot], settings: LeagueSettings) -> str:

@@ -80,39 +80,40 @@ class PommerPPOLearner(PPOTorchLearner):
                                 lr_or_lr_schedule=config.lr)
 
     def compute_loss_for_module(self, *, module_id, config, batch, fwd_out):
-        if module_id == LEARNER:
+        if self.should_module_be_updated(module_id):  # the learner, and an exploiter (league.py)
             logits = fwd_out[Columns.ACTION_DIST_INPUTS].detach()
-            dist = self.module[LEARNER].unwrapped().get_train_action_dist_cls().from_logits(logits)
+            module = self.module[module_id].unwrapped()
+            dist = module.get_train_action_dist_cls().from_logits(logits)
             log_ratio = dist.logp(batch[Columns.ACTIONS]) - batch[Columns.ACTION_LOGP]  # PPO's
             valid = (batch[Columns.LOSS_MASK].bool() if Columns.LOSS_MASK in batch
                      else torch.ones_like(log_ratio, dtype=torch.bool))
-            self._log_pi_health(logits[..., :NUM_ACTIONS],  # the moves' (TeamRadio: not words')
+            self._log_pi_health(module_id, logits[..., :NUM_ACTIONS],  # the moves' (not words')
                                 log_ratio[valid], batch[Columns.ACTION_LOGP][valid])
             bound = config.learner_config_dict.get(DUAL_CLIP_KEY, math.inf)
             if bound < math.inf:
                 advantages = batch[Postprocessing.ADVANTAGES]
                 clipped = dual_clipped(advantages, log_ratio, bound) & valid
-                self.metrics.log_value((LEARNER, "pi_dual_clipped_rows"), int(clipped.sum()),
+                self.metrics.log_value((module_id, "pi_dual_clipped_rows"), int(clipped.sum()),
                                        reduce="sum")
                 batch = {**batch, Postprocessing.ADVANTAGES: advantages.masked_fill(clipped, 0)}
         return super().compute_loss_for_module(module_id=module_id, config=config, batch=batch,
                                                fwd_out=fwd_out)
 
-    def _log_pi_health(self, logits: torch.Tensor, log_ratio: torch.Tensor,
+    def _log_pi_health(self, module_id: str, logits: torch.Tensor, log_ratio: torch.Tensor,
                        sampled_logp: torch.Tensor) -> None:
         """Per iteration: the largest batch-mean logit spread, and the extremes of PPO's log-ratio
         (log pi(a) now minus when sampled) over the rows it trains on, all and rare (module
         docstring): a log-ratio above 88 overflows PPO's float32 ratio to inf, whose backward is
         nan even where the clip or the min leaves that row's gradient at zero."""
         spread = (logits.max(-1).values - logits.min(-1).values).mean()
-        self.metrics.log_value((LEARNER, "pi_logit_spread"), spread.item(), reduce="max")
+        self.metrics.log_value((module_id, "pi_logit_spread"), spread.item(), reduce="max")
         rare = sampled_logp < RARE_LOGP
-        self.metrics.log_value((LEARNER, "pi_rare_rows"), int(rare.sum()), reduce="sum")
+        self.metrics.log_value((module_id, "pi_rare_rows"), int(rare.sum()), reduce="sum")
         for prefix, rows in (("pi_log_ratio", log_ratio), ("pi_rare_log_ratio", log_ratio[rare])):
             if rows.numel():
-                self.metrics.log_value((LEARNER, f"{prefix}_max"), rows.max().item(),
+                self.metrics.log_value((module_id, f"{prefix}_max"), rows.max().item(),
                                        reduce="max")
-                self.metrics.log_value((LEARNER, f"{prefix}_min"), rows.min().item(),
+                self.metrics.log_value((module_id, f"{prefix}_min"), rows.min().item(),
                                        reduce="min")
 
     def apply_gradients(self, gradients_dict) -> None:
@@ -125,4 +126,6 @@ class PommerPPOLearner(PPOTorchLearner):
 
     def before_gradient_based_update(self, *, timesteps) -> None:
         super().before_gradient_based_update(timesteps=timesteps)
-        self.module[LEARNER].unwrapped().require_pi()
+        for module_id, module in self.module.items():
+            if self.should_module_be_updated(module_id):
+                module.unwrapped().require_pi()

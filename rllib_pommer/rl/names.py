@@ -8,6 +8,7 @@ the envs share with the checker, are the game's: `game/rewards.py`.)
 from __future__ import annotations
 
 LEARNER = "learner"  # module id of the trained policy; fixed modules are named by their policy
+EXPLOITER = "exploiter"  # module id of a league's exploiter, trained to beat the learner alone
 ENV_NAME = "pommerman_team"  # the RLlib env's registered name (rl/env.py)
 # The learner's torch threads, for every process of a run's Ray job (rl/training.init_ray):
 # how the machine is used, not what PPO computes, so it is no key of the run's config and applies

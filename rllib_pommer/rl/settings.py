@@ -83,6 +83,13 @@ class LeagueSettings(TableSettings):
     priority_power: float = _option(2.0, low=0)
     priority_floor: float = _option(0.1, low=0, high=1)
     priority_halflife: int = _option(100)
+    # An exploiter (rl/league.py): a second trained module that plays the learner alone, joins
+    # its league, and whose pi fills the next snapshot slot when a block of
+    # `exploiter_gate_games` of its games is won at `exploiter_gate_win` or more; it then starts
+    # again from the learner's weights.
+    exploiter: bool = _option(False)
+    exploiter_gate_games: int = _option(300)
+    exploiter_gate_win: float = _option(0.5, low=0, high=1)
 
     @property
     def prioritized(self) -> bool:

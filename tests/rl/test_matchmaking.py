@@ -1,23 +1,26 @@
 """Prioritized matchmaking: the rule (records that fade, weights with a floor, turns in
 proportion without randomness), the curriculum's keys, and a league that spends its games on the
-member the learner fails to beat, with its book in the checkpoint."""
+member the learner fails to beat, with its book in the checkpoint; and a league's exploiter,
+trained against the learner alone, whose pi joins the league when it wins a block."""
 
 from __future__ import annotations
 
+import dataclasses
 import pickle
 import shutil
 from collections import Counter
 from types import SimpleNamespace
 
 import pytest
+import torch
 from ray.rllib.algorithms.algorithm import Algorithm
 
 from rllib_pommer.rl.config import build_config
 from rllib_pommer.rl.curriculum import load_curriculum
-from rllib_pommer.rl.league import MATCHMAKING_MODULE
+from rllib_pommer.rl.league import MATCHMAKING_MODULE, exploiter_step
 from rllib_pommer.rl.mapping import SeatMapping
 from rllib_pommer.rl.matchmaking import Record, WeightedTurns, priority, shares
-from rllib_pommer.rl.names import LEARNER
+from rllib_pommer.rl.names import EXPLOITER, LEARNER
 
 from .test_self_play import SELF_PLAY_SMOKE
 
@@ -144,3 +147,51 @@ def test_a_prioritized_league_plays_most_whom_it_fails_to_beat_and_keeps_its_boo
         assert restored.env_runner.config.policy_mapping_fn.weights == mapping.weights
     finally:
         restored.stop()
+
+
+EXPLOITER_SMOKE = PRIORITIZED_SMOKE.replace(
+    "priority_halflife = 50\n", "priority_halflife = 50\nexploiter = true\n"
+    "exploiter_gate_games = 100000\nexploiter_gate_win = 0.5\n").replace(
+    'opponent = ["suicide", "static_action"]', 'opponent = ["suicide"]').replace(
+    "gate_games = 4\n", "gate_games = 100000\n")
+
+
+def _same(a, b) -> bool:
+    return all(torch.equal(x, y) for x, y in zip(a.state_dict().values(),
+                                                 b.state_dict().values(), strict=True))
+
+
+def test_an_exploiter_trains_against_the_learner_alone_and_its_pi_joins_the_league(
+        ray_session, pi_weights, tmp_path):
+    path = tmp_path / "exploiter.toml"
+    path.write_text(EXPLOITER_SMOKE)
+    curriculum = load_curriculum(path)
+    assert curriculum.league_members() == ["suicide", EXPLOITER, "snapshot_0", "snapshot_1"]
+    algo = build_config(curriculum, pi_weights=pi_weights).build_algo()
+    try:
+        learner = algo.learner_group._learner
+        exploiter, main = learner.module[EXPLOITER], learner.module[LEARNER]
+        start = {k: v.clone() for k, v in exploiter.pi.state_dict().items()}
+        assert _same(exploiter.pi, main.pi)  # the same start
+        result = algo.train()
+        played = _games(result["env_runners"], EXPLOITER)
+        assert played > 0 and result["league"]["exploiter"]["gate_games"] in (played, 0)
+        assert EXPLOITER in algo.env_runner.config.policy_mapping_fn.opponent
+        assert not all(torch.equal(exploiter.pi.state_dict()[k], v) for k, v in start.items())
+        assert not _same(exploiter.pi, main.pi)  # each trains on its own rows
+        # a block won at the gate's rate: its pi joins the league, and it starts again
+        trained_exploiter = {k: v.clone() for k, v in exploiter.pi.state_dict().items()}
+        book = learner.module[MATCHMAKING_MODULE]
+        book.exploiter[:] = 0
+        league = dataclasses.replace(curriculum.league, exploiter_gate_games=6)
+        assert exploiter_step(learner, league, 2, 5, 99) is None  # the block is not full
+        slot = exploiter_step(learner, league, 2, 1, 100)
+        assert slot == "snapshot_0" and book.exploiter.tolist() == [0, 0]
+        assert all(torch.equal(learner.module[slot].pi.state_dict()[k], v)
+                   for k, v in trained_exploiter.items())
+        assert int(learner.module[slot].born) == 100
+        assert _same(exploiter.pi, main.pi) and _same(exploiter.vf, main.vf)
+        assert exploiter_step(learner, league, 2, 6, 101) is None  # lost: no slot
+        assert not learner.module["snapshot_1"].slot("snapshot_1").filled
+    finally:
+        algo.stop()
