@@ -24,6 +24,7 @@ RLLIB_POMMER_POLICIES: `shipped.data_dir` finds it from any working directory.
 from __future__ import annotations
 
 import importlib
+import math
 import os
 import sys
 from collections.abc import Callable, Iterable, Mapping
@@ -32,6 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from ..util.shipped import FOLDERS, data_dir
+from ..util.toml_values import fits
 from .action_filter import ActionFilter
 from .base import Agent
 from .http_agent import HttpAgent
@@ -122,8 +124,8 @@ KINDS: dict[str, Kind] = {
 
 
 def _check_params(path: Path, kind: str, params: Mapping[str, Any]) -> None:
-    """Unknown keys and values of the wrong type are errors, never ignored or coerced (a
-    `greedy = "false"` would otherwise be true)."""
+    """Unknown keys and values of the wrong type (`toml_values.fits`) are errors, never ignored
+    or coerced (a `greedy = "false"` would otherwise be true)."""
     valid = KINDS[kind].keys
     if valid is None:
         return
@@ -132,12 +134,41 @@ def _check_params(path: Path, kind: str, params: Mapping[str, Any]) -> None:
             raise ValueError(f"policy file {path}: unknown key {key!r} for kind {kind!r}; "
                              f"valid: {sorted(valid) or 'none'}")
         wanted = valid[key][0]
-        if type(value) is not wanted:
+        if not fits(value, wanted):
             raise ValueError(f"policy file {path}: {key} must be a {wanted.__name__}, got "
                              f"{value!r}")
     missing = [key for key, (_, required) in valid.items() if required and key not in params]
     if missing:
         raise ValueError(f"policy file {path}: kind {kind!r} needs key {missing[0]!r}")
+
+
+ACTING_KEYS = ("greedy", "temperature")  # how a learned policy acts, not which network it is
+
+
+@dataclass(frozen=True)
+class Acting:
+    """How a learned policy file says to choose moves (and a radio net's words): the most
+    likely one (`greedy`), or drawn from the softmax of the logits divided by `temperature`."""
+
+    greedy: bool = False
+    temperature: float = 1.0
+
+
+def acting(spec: PolicySpec) -> Acting:
+    """How the policy file `spec` acts: `greedy` (false unless said) and `temperature` (1.0
+    unless said). A ValueError naming the file for a temperature that is not a positive finite
+    number, or one beside `greedy = true`, which takes the most likely move at any
+    temperature."""
+    greedy = bool(spec.params.get("greedy", False))
+    value = spec.params.get("temperature", 1.0)
+    if not math.isfinite(value) or value <= 0:
+        raise ValueError(f"policy file {spec.path}: temperature must be a positive number, "
+                         f"got {value!r}")
+    if greedy and "temperature" in spec.params:
+        raise ValueError(f"policy file {spec.path}: temperature = {value!r} has no effect with "
+                         f"greedy = true (the most likely move at any temperature); drop one "
+                         f"of the two keys")
+    return Acting(greedy, float(value))
 
 
 def registered(kind: str) -> Kind:
@@ -176,17 +207,26 @@ def _load_spec(path: Path, filters: tuple[str, ...]) -> PolicySpec:
     if not isinstance(description, str):
         raise ValueError(f"policy file {path}: description must be a string")
     _check_params(path, kind, data)
-    return PolicySpec(path.stem, kind, description, path, data, filters)
+    spec = PolicySpec(path.stem, kind, description, path, data, filters)
+    if any(key in (KINDS[kind].keys or {}) for key in ACTING_KEYS):
+        acting(spec)  # checked with the file, whoever reads it (arena, training, a curriculum)
+    return spec
 
 
-def _looks_like_path(name_or_path: str | os.PathLike) -> bool:
+class UnknownPolicy(ValueError):
+    """No policy file goes by this name in `policies_dir()`."""
+
+
+def looks_like_path(name_or_path: str | os.PathLike) -> bool:
+    """Whether `resolve_policy` reads `name_or_path` as a path (a policy file, a run folder)
+    rather than as a name in `policies_dir()`."""
     text = os.fspath(name_or_path)
     return text.endswith(".toml") or os.sep in text or "/" in text
 
 
 def resolve_policy(name_or_path: str | os.PathLike) -> PolicySpec:
     """The spec of a policy name (optionally with a filter suffix) or of a policy file path."""
-    if _looks_like_path(name_or_path):
+    if looks_like_path(name_or_path):
         path = Path(name_or_path)
         if path.is_dir():  # a PPO run, trial or checkpoint folder: play its learner
             return PolicySpec(path.name, "rllib_checkpoint", f"learner of {path}", path,
@@ -214,7 +254,7 @@ def resolve_policy(name_or_path: str | os.PathLike) -> PolicySpec:
             path = folder / f"{base}.toml"
             if base and path.is_file():
                 return replace(_load_spec(path, filters), words=words)
-    raise ValueError(
+    raise UnknownPolicy(
         f"unknown policy {name!r}; valid: {policy_names()} (in {folder}), each optionally "
         f"suffixed with {sorted(FILTER_SUFFIXES)} and then {WORDS_SUFFIX!r}, or a path to a "
         ".toml policy file"

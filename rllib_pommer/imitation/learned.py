@@ -4,8 +4,10 @@ A policy file of kind "learned" names its weights (`weights = "imitation/pi.pt"`
 file) and how to act (`greedy = false` samples from the softmax with the agent's own random
 stream, as PPO's stochastic policy does; `true` takes the most likely action; `temperature`,
 1.0 unless said, divides the logits before a sampled choice, of a move and of a RadioNet's words
-alike: below 1 sharpens the distribution toward the greedy action, above 1 flattens it). Weights
-load with `torch.load(weights_only=True)`: plain tensors only, no arbitrary pickle.
+alike: below 1 sharpens the distribution toward the greedy action, above 1 flattens it;
+`agents/registry.acting` reads and checks both keys with the file). Weights load with
+`torch.load(weights_only=True)`: plain tensors only, no arbitrary pickle. A training run's
+frozen opponents read their files here too (`load_learned`), so they act as in the arena.
 
 Both kinds of learned policy are played here: "learned" (a state_dict file) and, registered by
 `rl/checkpoint_policy.py`, "rllib_checkpoint" (a PPO run's learner). Each kind registers the key
@@ -26,7 +28,7 @@ until then, and always in Team) and speaks the net's two words. A Team network s
 
 from __future__ import annotations
 
-import math
+import warnings
 from collections.abc import Callable, Mapping, Sequence
 from functools import cache
 from pathlib import Path
@@ -37,7 +39,10 @@ import torch
 
 from ..agents.base import innermost
 from ..agents.registry import (
+    ACTING_KEYS,
+    Acting,
     PolicySpec,
+    acting,
     make_agent,
     register_kind,
     registered,
@@ -46,6 +51,7 @@ from ..agents.registry import (
 from ..agents.speaker import SILENCE
 from ..game.constants import NUM_ACTIONS, RADIO_NUM_WORDS, RADIO_VOCAB_SIZE, has_radio
 from ..game.observation import Observation
+from ..util.errors import first_sentence
 from .features import featurize, message_features
 from .network import PommerNet, RadioNet, build_net, is_radio_state, load_weights
 
@@ -57,12 +63,17 @@ def load_policy_net(path: str | Path, num_outputs: int = NUM_ACTIONS,
     a `PommerNet` for a Team one; `radio=True` asks for a `RadioNet` from either (a Team net's
     move logits exactly: `network.load_weights`), `radio=False` for a `PommerNet`."""
     path = Path(path)
+    if path.is_dir():
+        raise ValueError(f"{path}: a folder, not a weights file")
     if not path.is_file():
         raise ValueError(f"{path}: weights file not found")
     try:
-        state = torch.load(path, map_location="cpu", weights_only=True)
+        with warnings.catch_warnings():  # a pickle of another protocol: the error says enough
+            warnings.filterwarnings("ignore", "Detected pickle protocol")
+            state = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as exc:  # torch raises several types for corrupt or foreign files
-        raise ValueError(f"{path}: not a readable weights file ({exc})") from None
+        raise ValueError(f"{path}: not a readable weights file, a state_dict of tensors "
+                         f"({first_sentence(exc)})") from None
     net = build_net(num_outputs, is_radio_state(state) if radio is None else radio)
     try:
         load_weights(net, state)
@@ -72,13 +83,14 @@ def load_policy_net(path: str | Path, num_outputs: int = NUM_ACTIONS,
 
 
 class LearnedPolicy:
-    """One network shared by every agent of a policy in this process; `source` is the file its
-    weights were read from (a state_dict, or a checkpoint's module state)."""
+    """One network with how its policy file says to act (`Acting`); `source` is the file its
+    weights were read from (a state_dict, or a checkpoint's module state). The arena shares one
+    among every agent of a policy in a process; a training run's frozen module holds its own."""
 
-    def __init__(self, net: PommerNet, greedy: bool, source: Path, temperature: float = 1.0):
+    def __init__(self, net: PommerNet, source: Path, how: Acting):
         self.net = net
-        self.greedy = greedy
-        self.temperature = temperature
+        self.greedy = how.greedy
+        self.temperature = how.temperature
         self.source = source
         self.radio = isinstance(net, RadioNet)
 
@@ -99,8 +111,20 @@ class LearnedPolicy:
         return _softmax(self.tempered_logits(obs, messages)[:, :NUM_ACTIONS])
 
     def tempered_logits(self, obs: Observation, messages: np.ndarray | None = None) -> torch.Tensor:
-        """`logits` divided by the policy's temperature: what moves and words are drawn from."""
-        return self.logits(obs, messages) / self.temperature
+        """`logits` at the policy's temperature (`temper`): what moves and words are drawn from."""
+        return self.temper(self.logits(obs, messages))
+
+    def temper(self, logits: torch.Tensor) -> torch.Tensor:
+        """The net's logits (..., 6), or a radio net's (..., 6 + 16), as logits of the same
+        distributions at the policy's temperature: each categorical (the move, each word) shifted
+        so that its largest logit is 0, then divided by the temperature in float64. That gives
+        the probabilities of logits / T, and stays finite for any positive T: every value is at
+        most 0 before the division and the largest stay 0, so as T -> 0 all the mass goes to
+        the most likely choice (where logits / T itself would overflow into NaN)."""
+        sizes = [NUM_ACTIONS] + [RADIO_VOCAB_SIZE] * RADIO_NUM_WORDS * self.radio
+        parts = logits.double().split(sizes, dim=-1)
+        shifted = [(part - part.amax(-1, keepdim=True)) / self.temperature for part in parts]
+        return torch.cat(shifted, -1).to(logits.dtype)
 
     def choose(self, probs: np.ndarray, rngs: Sequence[np.random.Generator]) -> np.ndarray:
         if self.greedy:
@@ -193,22 +217,7 @@ def register_learned_kind(kind: str, key: str, load: Loader) -> None:
     """Make policy files of `kind` playable as learned agents: `key` names the path (relative to
     the file) that `load` reads a network from, given the file's other keys."""
     LOADERS[kind] = (key, load)
-    register_kind(kind, lambda spec: learned_agent(_shared_policy(
-        kind, spec.file(key), bool(spec.params.get("greedy", False)), _temperature(spec),
-        _options(spec, key))))
-
-
-ACTING_KEYS = ("greedy", "temperature")  # how a learned policy acts, not which network it is
-
-
-def _temperature(spec: PolicySpec) -> float:
-    """The file's sampling temperature (1.0 if absent); a ValueError naming the file unless it
-    is a positive finite number."""
-    value = spec.params.get("temperature", 1.0)
-    if not math.isfinite(value) or value <= 0:
-        raise ValueError(f"policy file {spec.path}: temperature must be a positive number, "
-                         f"got {value!r}")
-    return float(value)
+    register_kind(kind, lambda spec: learned_agent(load_learned(spec, shared=True)))
 
 
 def _options(spec: PolicySpec, key: str) -> tuple[tuple[str, Any], ...]:
@@ -218,22 +227,25 @@ def _options(spec: PolicySpec, key: str) -> tuple[tuple[str, Any], ...]:
                         if k != key and k not in ACTING_KEYS))
 
 
-def load_learned(spec: PolicySpec) -> tuple[PommerNet, Path]:
-    """A fresh network of a learned policy of any registered kind, and the file it was read
-    from."""
+def load_learned(spec: PolicySpec, shared: bool = False) -> LearnedPolicy:
+    """The policy of a learned policy file of any registered kind: its network, the file that
+    was read from, and how the file says to act (`acting`). `shared`: the one policy of this
+    process for the file's network and acting (cached), else a fresh one."""
     registered(spec.kind)  # a plugin kind's module registers its loader
     if spec.kind not in LOADERS:
         raise ValueError(f"policy {spec.name!r} (kind {spec.kind!r}) is not a learned policy; "
                          f"learned kinds: {sorted(LOADERS)}")
-    key, load = LOADERS[spec.kind]
-    return load(spec.file(key), dict(_options(spec, key)))
+    key = LOADERS[spec.kind][0]
+    build = _shared_policy if shared else _policy
+    return build(spec.kind, spec.file(key), acting(spec), _options(spec, key))
 
 
-@cache
-def _shared_policy(kind: str, path: Path, greedy: bool, temperature: float,
-                   options: tuple[tuple[str, Any], ...]) -> LearnedPolicy:
-    net, source = LOADERS[kind][1](path, dict(options))
-    return LearnedPolicy(net, greedy, source, temperature)
+def _policy(kind: str, path: Path, how: Acting,
+            options: tuple[tuple[str, Any], ...]) -> LearnedPolicy:
+    return LearnedPolicy(*LOADERS[kind][1](path, dict(options)), how)
+
+
+_shared_policy = cache(_policy)
 
 
 def _load_weights(path: Path, options: Mapping[str, Any]) -> tuple[PommerNet, Path]:

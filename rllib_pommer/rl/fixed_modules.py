@@ -13,11 +13,11 @@ observation (board layout and seat), so seeded episodes replay exactly; a row wh
 already marked seeded keeps its stream (the arena cross-test seeds it as the arena would). Rules
 that remember nothing (Static, Suicide) make stateless modules.
 
-Learned and RLlib-checkpoint policies are frozen `PommerNet`s that act by sampling (or greedily,
-per their policy file) on the "planes". In TeamRadio (a `MultiDiscrete([6, 8, 8])` action
-space) a radio network (`RadioNet`) also hears the "message" and speaks by the same rule; a
-Team network plays its moves alone there, which send the words (0, 0), and so do scripted
-policies.
+Learned and RLlib-checkpoint policies are frozen `PommerNet`s that act on the "planes" as their
+policy file says, read by the arena's reader: sampling at the file's temperature, or greedily.
+In TeamRadio (a `MultiDiscrete([6, 8, 8])` action space) a radio network (`RadioNet`) also
+hears the "message" and speaks by the same rule; a Team network plays its moves alone there,
+which send the words (0, 0), and so do scripted policies.
 """
 
 from __future__ import annotations
@@ -38,7 +38,6 @@ from ..agents.scripted import RULES
 from ..agents.simple import RECENT_LENGTH, SimpleMemory
 from ..game.raw_codec import unpack_raw
 from ..imitation.learned import load_learned
-from ..imitation.network import RadioNet
 
 # Packed memory: recent cells (6 x 2), recent_len, prev_dir, rng state (uint64 bits), seeded flag.
 _RECENT = 2 * RECENT_LENGTH
@@ -121,17 +120,18 @@ class ScriptedModule(RLModule):
 
 
 class FrozenNetModule(TorchRLModule):
-    """A frozen policy network; model_config: {"policy": a learned/rllib_checkpoint name}."""
+    """A frozen policy network; model_config: {"policy": a learned/rllib_checkpoint name}. It
+    reads the policy file as the arena does (`imitation/learned.load_learned`) and acts as the
+    file says: greedily, or sampling from its logits at the file's temperature
+    (`LearnedPolicy.temper`)."""
 
     def setup(self):
         spec = resolve_policy(self.model_config["policy"])
-        net, _ = load_learned(spec)
-        self.pi = net.requires_grad_(False)
-        self.greedy = bool(spec.params.get("greedy", False))
-        self.speaks = isinstance(net, RadioNet)
+        self.policy = load_learned(spec)
+        self.pi = self.policy.net.requires_grad_(False)
         self.lens = ([int(n) for n in self.action_space.nvec]
                      if isinstance(self.action_space, gym.spaces.MultiDiscrete) else None)
-        if self.speaks and self.lens is None:
+        if self.policy.radio and self.lens is None:
             raise ValueError(f"policy {spec.name!r} is a TeamRadio network; it plays only in "
                              f"TeamRadio (env config game = \"radio\")")
         if self.lens is not None:
@@ -140,16 +140,16 @@ class FrozenNetModule(TorchRLModule):
 
     def _forward(self, batch, **kwargs):
         obs = batch[Columns.OBS]
-        if not self.speaks:
-            logits = self.pi(obs["planes"])
-            if self.greedy:
+        if not self.policy.radio:
+            logits = self.policy.temper(self.pi(obs["planes"]))
+            if self.policy.greedy:
                 return {Columns.ACTIONS: logits.argmax(-1)}
             if self.lens is None:
                 return {Columns.ACTION_DIST_INPUTS: logits}
             # a Team network in TeamRadio: its moves alone
             return {Columns.ACTIONS: torch.distributions.Categorical(logits=logits).sample()}
-        logits = self.pi(obs["planes"], obs["message"])
-        if self.greedy:
+        logits = self.policy.temper(self.pi(obs["planes"], obs["message"]))
+        if self.policy.greedy:
             parts = logits.split(self.lens, dim=-1)
             return {Columns.ACTIONS: torch.stack([part.argmax(-1) for part in parts], -1)}
         return {Columns.ACTION_DIST_INPUTS: logits}

@@ -33,6 +33,7 @@ import torch
 from ray import tune
 from ray.tune.result import SHOULD_CHECKPOINT
 
+from ..util.errors import first_sentence
 from . import quiet, ray_session, tune_state
 from .checkpoint_policy import trial_dirs, unreadable
 from .config import build_config, check_weights
@@ -61,11 +62,6 @@ class RayStartError(RuntimeError):
 RAY_START_HINT = ("check free memory and disk (Ray writes to /tmp/ray and /dev/shm), whether "
                   "Ray processes of an earlier run linger (`ray status`), and the logs in "
                   "/tmp/ray/session_latest/logs")
-
-
-def _first_line(exc: BaseException) -> str:
-    text = str(exc).strip()
-    return f"{type(exc).__name__}: {text.splitlines()[0] if text else ''}".rstrip(": ")
 
 
 def init_ray(address: str | None, *, num_cpus: int = RunSettings.num_cpus,
@@ -99,7 +95,7 @@ def init_ray(address: str | None, *, num_cpus: int = RunSettings.num_cpus,
                 f"authentication on): run with RAY_AUTH_MODE=token and the cluster's token in "
                 f"~/.ray/auth_token, RAY_AUTH_TOKEN or RAY_AUTH_TOKEN_PATH") from None
         where = f"the Ray cluster at {address!r}" if address else "a local Ray instance"
-        raise RayStartError(f"{where} did not start ({_first_line(exc)}); "
+        raise RayStartError(f"{where} did not start ({first_sentence(exc)}); "
                             f"{RAY_START_HINT}") from None
 
 

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import pickle
+import warnings
 
 import numpy as np
 import pytest
@@ -15,6 +17,7 @@ from rllib_pommer.imitation import bc
 from rllib_pommer.imitation.bc import BCConfig, evaluate, train, write_policy_file
 from rllib_pommer.imitation.learned import load_policy_net
 from rllib_pommer.imitation.network import PommerNet
+from rllib_pommer.rl.config import check_weights
 
 
 @pytest.fixture(scope="module")
@@ -106,6 +109,33 @@ def test_bad_weights_files_are_named(tmp_path):
     torch.save(PommerNet(num_outputs=1).state_dict(), wrong)
     with pytest.raises(ValueError, match="value_net.pt: weights do not fit PommerNet"):
         load_policy_net(wrong)
+
+
+@pytest.mark.parametrize("content", [
+    pickle.dumps(object),  # a pickle torch will not load without running code
+    b"not a torch file",
+    b"PK\x03\x04 cut short",  # the start of torch's zip format
+], ids=["pickle", "text", "cut_zip"])
+def test_an_unreadable_weights_file_is_one_line_without_torchs_advice(tmp_path, content):
+    """Issue 50, case 29: torch's paragraphs (load with weights_only=False, file an issue) do
+    not follow our line, and no warning of torch's precedes it."""
+    path = tmp_path / "pi.pt"
+    path.write_bytes(content)
+    with pytest.raises(ValueError) as info, warnings.catch_warnings(record=True) as warned:
+        warnings.simplefilter("always")
+        load_policy_net(path)
+    assert [str(w.message) for w in warned] == []
+    message = str(info.value)
+    assert message.startswith(f"{path}: not a readable weights file, a state_dict of tensors (")
+    assert "\n" not in message and "weights_only" not in message and "issue" not in message
+
+
+def test_a_folder_given_as_weights_is_named_a_folder(tmp_path):
+    """Issue 50, case 30: a folder exists, so "not found" would send the user looking for it."""
+    with pytest.raises(ValueError, match=f"^{tmp_path}: a folder, not a weights file$"):
+        load_policy_net(tmp_path)
+    with pytest.raises(ValueError, match=f"^{tmp_path}: a folder, not a weights file$"):
+        check_weights(tmp_path)
 
 
 def test_the_learning_rate_decays_by_a_cosine_to_its_floor(tmp_path):

@@ -4,14 +4,22 @@ it before a sampled move, so a cold policy plays its most likely move and a hot 
 from __future__ import annotations
 
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
 import torch
 
-from rllib_pommer.agents.registry import make_agent
-from rllib_pommer.game.constants import NUM_ACTIONS, TEAM_PRESET, GameType
-from rllib_pommer.imitation.network import PommerNet
+from rllib_pommer.agents.registry import Acting, make_agent
+from rllib_pommer.game.constants import (
+    NUM_ACTIONS,
+    RADIO_NUM_WORDS,
+    RADIO_VOCAB_SIZE,
+    TEAM_PRESET,
+    GameType,
+)
+from rllib_pommer.imitation.learned import LearnedPolicy
+from rllib_pommer.imitation.network import PommerNet, RadioNet
 
 from ..serving.conftest import team_observations
 
@@ -38,13 +46,35 @@ def _agent(path: str, seed: int = 0):
     return agent
 
 
-def test_a_cold_policy_plays_its_most_likely_move(tmp_path):
+@pytest.mark.parametrize("temperature", ["0.001", "1e-300", "1e-320"])
+def test_a_cold_policy_plays_its_most_likely_move(tmp_path, temperature):
+    """As T -> 0 the moves are the greedy ones, also where logits / T overflows float32 and
+    float64 (issue 50, case 11: NaN probabilities, Stop every step)."""
     observations = team_observations(SEAT, 12, 4, TEAM_PRESET)
-    cold = _agent(_policy(tmp_path, "0.001"))
-    greedy = cold.policy.probabilities(
-        type(observations[0])(*(np.stack(f) for f in zip(*observations, strict=True))))
-    moves = [cold.act(obs) for obs in observations]
-    assert moves == list(greedy.argmax(-1))
+    cold = _agent(_policy(tmp_path, temperature))
+    batch = type(observations[0])(*(np.stack(f) for f in zip(*observations, strict=True)))
+    greedy = cold.policy.logits(batch).argmax(-1).numpy()
+    assert (greedy != 0).any()  # so that Stop every step (NaN probabilities) is told apart
+    probabilities = cold.policy.probabilities(batch)
+    assert np.isfinite(probabilities).all() and np.array_equal(probabilities.argmax(-1), greedy)
+    assert [cold.act(obs) for obs in observations] == list(greedy)
+
+
+def test_a_radio_nets_move_and_words_are_tempered_one_by_one():
+    """Each categorical of a radio net (the move, each word) keeps its own distribution: at
+    0.5 the probabilities of logits / 0.5, and at a vanishing temperature its most likely
+    choice, though the parts' logits lie far apart."""
+    logits = torch.randn(5, NUM_ACTIONS + RADIO_NUM_WORDS * RADIO_VOCAB_SIZE,
+                         generator=torch.Generator().manual_seed(0))
+    logits[:, NUM_ACTIONS:] -= 50.0  # words far below every move
+    sizes = [NUM_ACTIONS] + [RADIO_VOCAB_SIZE] * RADIO_NUM_WORDS
+    for temperature in (0.5, 1e-300):
+        policy = LearnedPolicy(RadioNet(), Path("radio.pt"), Acting(False, temperature))
+        tempered = policy.temper(logits).split(sizes, dim=-1)
+        for part, raw in zip(tempered, logits.split(sizes, dim=-1), strict=True):
+            expected = (torch.softmax(raw.double() / 0.5, -1) if temperature == 0.5
+                        else torch.eye(raw.shape[-1], dtype=torch.float64)[raw.argmax(-1)])
+            assert torch.allclose(torch.softmax(part.double(), -1), expected, atol=1e-6)
 
 
 def test_a_hot_policy_plays_every_move_about_as_often(tmp_path):
@@ -62,10 +92,31 @@ def test_a_hot_policy_plays_every_move_about_as_often(tmp_path):
     ("0.0", "temperature must be a positive number, got 0.0"),
     ("-1.5", "temperature must be a positive number, got -1.5"),
     ("nan", "temperature must be a positive number, got nan"),
-    ("1", "temperature must be a float, got 1"),
+    ("true", "temperature must be a float, got True"),
+    ('"hot"', "temperature must be a float, got 'hot'"),
 ])
 def test_a_temperature_that_is_not_a_positive_number_is_refused(tmp_path, value, message):
     path = _policy(tmp_path, value)
     with pytest.raises(ValueError, match=re.escape(message)) as info:
         make_agent(path)
     assert path in str(info.value)
+
+
+def test_a_whole_number_temperature_is_that_float(tmp_path):
+    """`temperature = 2` is 2.0, as a float key of a curriculum takes a whole number (issue
+    50, case 23)."""
+    obs = team_observations(SEAT, 12, 4, TEAM_PRESET)[5]
+    batch = type(obs)(*(f[None] for f in obs))
+    whole, written = _agent(_policy(tmp_path, "2")), _agent(_policy(tmp_path, "2.0"))
+    assert whole.policy.temperature == 2.0
+    assert np.array_equal(whole.policy.probabilities(batch), written.policy.probabilities(batch))
+
+
+def test_a_temperature_beside_greedy_is_refused(tmp_path):
+    """A greedy policy takes its most likely move at any temperature: the file says two
+    things, one of which would be ignored (issue 50, case 13)."""
+    path = Path(_policy(tmp_path, "0.5"))
+    path.write_text(path.read_text().replace("greedy = false", "greedy = true"))
+    with pytest.raises(ValueError, match=re.escape(
+            f"policy file {path}: temperature = 0.5 has no effect with greedy = true")):
+        make_agent(str(path))

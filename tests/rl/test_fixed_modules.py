@@ -1,5 +1,5 @@
 """Scripted modules carry their rule's memory through RLlib state and play every scripted kind as
-the arena's agents do."""
+the arena's agents do; frozen networks act as their policy files say, as in the arena."""
 
 from __future__ import annotations
 
@@ -12,6 +12,7 @@ from rllib_pommer.agents.scripted import RULES
 from rllib_pommer.agents.simple import new_memory, simple_actions
 from rllib_pommer.arena.match import MatchSpec, record_games, seats_of_team_a
 from rllib_pommer.game.seeding import game_seeds
+from rllib_pommer.imitation.network import PommerNet
 from rllib_pommer.rl.env import (
     ACTION_SPACE,
     OBSERVATION_SPACE,
@@ -19,7 +20,12 @@ from rllib_pommer.rl.env import (
     agent_observations,
     unpack_raw,
 )
-from rllib_pommer.rl.fixed_modules import ScriptedModule, _seed_streams, pack_memory
+from rllib_pommer.rl.fixed_modules import (
+    FrozenNetModule,
+    ScriptedModule,
+    _seed_streams,
+    pack_memory,
+)
 
 
 def _module(kind):
@@ -108,3 +114,37 @@ def test_every_scripted_kind_plays_the_arenas_game_in_the_rllib_env(kind):
         assert terminateds["__all__"]
         assert sorted(next(iter(infos.values()))["winners"]) == sorted(
             replay["final_info"].get("winners", []))
+
+
+def _frozen(tmp_path, lines: str) -> FrozenNetModule:
+    """A frozen module playing a learned policy file over a random network with `lines`."""
+    torch.manual_seed(0)
+    torch.save(PommerNet().state_dict(), tmp_path / "net.pt")
+    path = tmp_path / f"p{len(list(tmp_path.glob('*.toml')))}.toml"
+    path.write_text(f'kind = "learned"\nweights = "net.pt"\n{lines}\n')
+    return FrozenNetModule(observation_space=OBSERVATION_SPACE, action_space=ACTION_SPACE,
+                           model_config={"policy": str(path)})
+
+
+def test_a_frozen_opponent_samples_at_its_files_temperature(tmp_path):
+    """A training run's frozen opponent reads its policy file as the arena does (issue 50,
+    case 12): the distribution it samples from is the net's at the file's temperature, and a
+    vanishing one plays the most likely move."""
+    env = PommeEnv({"seed": 1})
+    obs, _ = env.reset(seed=1)
+    planes = torch.from_numpy(np.stack([obs[a]["planes"] for a in range(4)]))
+    batch = {Columns.OBS: {"planes": planes}}
+    plain = _frozen(tmp_path, "greedy = false")
+    logits = plain.pi(planes)
+    for temperature in (0.5, 1e-300):
+        module = _frozen(tmp_path, f"greedy = false\ntemperature = {temperature}")
+        drawn = torch.softmax(module.forward_exploration(batch)[Columns.ACTION_DIST_INPUTS], -1)
+        expected = (torch.softmax(logits / 0.5, -1) if temperature == 0.5
+                    else torch.eye(logits.shape[-1])[logits.argmax(-1)])
+        assert torch.allclose(drawn, expected, atol=1e-6)
+
+
+def test_a_frozen_opponent_refuses_what_the_arena_refuses(tmp_path):
+    with pytest.raises(ValueError, match=r"p0.toml: temperature must be a positive number, "
+                                         r"got nan"):
+        _frozen(tmp_path, "greedy = false\ntemperature = nan")
