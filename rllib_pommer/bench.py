@@ -1,5 +1,5 @@
-"""`python -m rllib_pommer.bench engine|agents|train|layout|learn [--json]`: our speed, side by
-side.
+"""`python -m rllib_pommer.bench engine|agents|search|train|layout|learn [--json]`: our speed,
+side by side.
 
 Each target's measures live beside the code they measure; this job runs them, and for engine and
 agents compares with the reference's figures (tests/reference/reference_speed.json):
@@ -9,6 +9,9 @@ agents compares with the reference's figures (tests/reference/reference_speed.js
   `radio_..._vs_team` figures are radio's median over Team's);
 - `agents`: protocol (b), four SimpleAgents as one object per seat and as the batched kernel
   (`agents/speed.py`);
+- `search`: the search agent's time per decision (p50, p99, max over 100 games against
+  SimpleAgent, after one warm-up game), at its default effort (`search`) and the cheaper one
+  (`search_fast`), and the arena's games/s on one worker (`agents/speed.py`, `arena/match.py`);
 - `train`: the quick curriculum's PPO for a few iterations on the real env and on a zero-cost twin
   with the same spaces; env steps/s of both and their ratio (`rl/speed.py`);
 - `layout`: the quick curriculum's PPO on the real env sampled in the learner's process (0 env
@@ -29,6 +32,7 @@ import argparse
 import json
 import statistics
 import sys
+import time
 from functools import partial
 from pathlib import Path
 
@@ -89,6 +93,27 @@ def bench_agents() -> dict:
                     "b_simpleagent_games", "games_per_s")
 
 
+SEARCH_POLICIES = ("search", "search_fast")
+ARENA_GAMES = 32
+
+
+def bench_search() -> dict:
+    """Per search policy: its decision times against SimpleAgent and arena games/s (one worker,
+    seed 0)."""
+    from .agents import speed
+    from .arena.match import MatchSpec, play_match
+
+    out = {}
+    for policy in SEARCH_POLICIES:
+        speed.decision_times(policy, "simple", 1)  # compiles, or loads the kernel cache
+        times = speed.decision_times(policy, "simple", speed.SEARCH_GAMES)
+        out.update({f"{policy}_{k}": v for k, v in times.items()})
+        start = time.perf_counter()
+        play_match(MatchSpec(policy, "simple", ARENA_GAMES), workers=1)
+        out[f"{policy}_arena_games_per_s"] = ARENA_GAMES / (time.perf_counter() - start)
+    return out
+
+
 def bench_train() -> dict:
     """PPO env steps/s on the real env and on a zero-cost env with the same spaces, one run."""
     from .rl.speed import train_speeds  # Ray and torch only for this target
@@ -129,6 +154,8 @@ def _print(title: str, result: dict) -> None:
 TARGETS = {
     "engine": ("protocol (a): Team and TeamRadio, 200 games x 3 runs", bench_engine),
     "agents": ("protocol (b): 4 SimpleAgents, 20 games x 3 runs", bench_agents),
+    "search": ("search agent: ms per decision vs SimpleAgent (100 games), arena games/s",
+               bench_search),
     "train": ("PPO sampling + learning, real env vs zero-cost env", bench_train),
     "layout": ("PPO env steps/s: 0 env runners + 1 learner thread vs 2 + 2 (an idle machine)",
                bench_layout),

@@ -43,3 +43,15 @@ def test_bench_engine_prints_our_speed_beside_the_reference(monkeypatch, capsys)
     for api in ("single", "batched"):
         assert result[f"radio_{api}_vs_team"] == (result[f"radio_{api}_steps_per_s"]
                                                   / result[f"{api}_steps_per_s"])
+
+
+def test_bench_search_times_each_search_policys_decisions(monkeypatch, capsys):
+    monkeypatch.setattr(agents_speed, "SEARCH_GAMES", 2)
+    monkeypatch.setattr(bench, "ARENA_GAMES", 2)
+    assert bench.main(["search", "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    for policy in bench.SEARCH_POLICIES:
+        assert 0 < result[f"{policy}_p50_ms"] <= result[f"{policy}_p99_ms"] <= result[
+            f"{policy}_max_ms"]
+        assert result[f"{policy}_decisions"] > 2 * 20  # two seats, two games of 20+ steps
+        assert result[f"{policy}_games_per_s"] > 0 and result[f"{policy}_arena_games_per_s"] > 0
