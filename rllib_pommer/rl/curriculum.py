@@ -17,18 +17,20 @@ the stages in order::
     episodes = 10000
     freeze_pi = true
 
-A stage lasts `episodes` lifetime episodes (counted over all env runners). Policies are names from
-`policies/` whose kind has a fixed RLlib module (`agents/registry.KINDS`: scripted kinds, or frozen
-learned / RLlib-checkpoint policies); a teammate may also be `"learner"`, the trained policy
-itself, so both seats of its team learn as one policy (the paper's recipe keeps a SuicideTeammate
-beside a lone learner), and an opponent a list of policies, a league that takes turns by
-episodes (`opponent = ["simple", "static", "ppo_cautious"]`; rl/mapping.py says how), and
-names may carry the registry's filter suffixes (`simple_action`: SimpleAgent behind the action
-filter). A `[league]` table (`slots`, `gate_games`, `gate_win`) adds frozen self-play snapshots of
-the learner, which join the league of every stage marked `self_play = true` (rl/league.py), and
-may ask for `matchmaking = "prioritized"` (with `priority_power`, `priority_floor`,
-`priority_halflife`): the league's members then meet the learner by how often it fails to beat
-them (rl/matchmaking.py) instead of in turn.
+A stage lasts `episodes` lifetime episodes (counted over all env runners). Policies are names
+from `policies/` (never paths: each name is an RLlib module id) whose kind has a fixed RLlib
+module (`agents/registry.KINDS`: scripted kinds, or frozen learned / RLlib-checkpoint policies,
+whose files are read and checked as the arena reads them); a teammate may also be `"learner"`,
+the trained policy itself, so both seats of its team learn as one policy (the paper's recipe
+keeps a SuicideTeammate beside a lone learner), and an opponent a list of policies, a league
+that takes turns by episodes (`opponent = ["simple", "static", "ppo_cautious"]`; rl/mapping.py
+says how), and names may carry the registry's filter suffixes (`simple_action`: SimpleAgent
+behind the action filter). A `[league]` table (`slots`, `gate_games`, `gate_win`) adds frozen
+self-play snapshots of the learner, which join the league of every stage marked `self_play =
+true` (rl/league.py; a `[league]` table needs at least one), and may ask for `matchmaking =
+"prioritized"` (with `priority_power`, `priority_floor`, `priority_halflife`): the league's
+members then meet the learner by how often it fails to beat them (rl/matchmaking.py) instead of
+in turn.
 `game = "radio"` trains in TeamRadio: the learner's action is [move, word, word] and it hears its
 teammate's words (rl/rl_module.py); scripted and Team policies in the other seats play moves,
 which send no words, so `teammate = "learner"` is how the words reach a listener that learns;
@@ -50,6 +52,8 @@ from typing import Any
 from ..agents.registry import (
     KINDS,
     WORDS_SUFFIX,
+    UnknownPolicy,
+    looks_like_path,
     policies_dir,
     policy_names,
     resolve_policy,
@@ -57,6 +61,7 @@ from ..agents.registry import (
 from ..game.constants import PRESETS, TEAM_PRESET, has_teams
 from ..game.rewards import REWARD_MODES
 from ..util.shipped import data_dir
+from ..util.toml_values import fits
 from .matchmaking import MATCHMAKING
 from .names import EXPLOITER, LEARNER
 from .settings import LeagueSettings, PPOSettings
@@ -192,10 +197,8 @@ def _check_keys(where: str, table: dict, valid) -> None:
 
 
 def _check_type(where: str, key: str, value: Any, kind: type, positive: bool = False) -> None:
-    """Strict TOML types: a bool is not a number, a string is not a bool; a float may be
-    written as an integer."""
-    fits = (type(value) is kind or (kind is float and type(value) is int))
-    if not fits or (positive and not value > 0):
+    """A value of the key's type (`toml_values.fits`), positive where asked."""
+    if not fits(value, kind) or (positive and not value > 0):
         wanted = ("a positive integer" if positive else
                   {bool: "true or false", int: "an integer", float: "a number",
                    str: "a string"}[kind])
@@ -209,15 +212,27 @@ def _check_options(where: str, table: dict, options: dict) -> None:
         kind, low, high = options[key]
         _check_type(where, key, value, kind, positive=kind is int)
         if (low is not None and not value > low) or (high is not None and not value <= high):
-            raise ValueError(f"{where}: {key} must be in ({low}, {high or 'inf'}], "
-                             f"got {value!r}")
+            raise ValueError(f"{where}: {key} must be {_bounds(low, high)}, got {value!r}")
+
+
+def _bounds(low: float | None, high: float | None) -> str:
+    """The range (low, high] in words; a None end is open."""
+    return f"at most {high}" if low is None else f"in ({low}, {'inf' if high is None else high}]"
 
 
 def _check_policy(where: str, name: Any) -> None:
+    """A policy a fixed module can play, named as RLlib names the module: a name in
+    `policies_dir()`, not a path (RLlib refuses a module id with a slash)."""
+    if looks_like_path(name):
+        raise ValueError(f"{where}: {name!r} is a path; a curriculum names its policies by their "
+                         f"names in {policies_dir()} (each one names an RLlib module): put the "
+                         f"policy file there and write its name, e.g. {Path(name).stem!r}")
     try:
         spec = resolve_policy(name)
-    except ValueError:
+    except UnknownPolicy:
         raise ValueError(f"{where}: unknown policy {name!r}; valid: {policy_names()}") from None
+    except ValueError as exc:  # a policy file that does not hold a policy
+        raise ValueError(f"{where}: {exc}") from None
     if spec.words:
         raise ValueError(f"{where}: policy {name!r} speaks (its {WORDS_SUFFIX!r} suffix), which "
                          f"the fixed RLlib modules do not: name it without {WORDS_SUFFIX!r} "
@@ -262,6 +277,24 @@ def _stage(where: str, table: dict) -> Stage:
     return stage
 
 
+def _check_self_play(where: str, stages: tuple[Stage, ...], league: bool, game: str) -> None:
+    """Self-play snapshots come with the stages they play in: a stage marked `self_play` needs
+    the `[league]` table that makes the snapshots, which are Team nets (the Team game only), and
+    a `[league]` table needs a stage to play its snapshots in (else they are built and never
+    played)."""
+    playing = [i + 1 for i, stage in enumerate(stages) if stage.self_play]
+    if playing and game != "team":
+        raise ValueError(f"{where} stage {playing[0]}: self_play (snapshots of the learner, Team "
+                         f"nets) plays the Team game only, not game {game!r}")
+    if playing and not league:
+        raise ValueError(f"{where} stage {playing[0]}: self_play needs a [league] table "
+                         f"(slots, gate_games, gate_win)")
+    if league and not playing:
+        raise ValueError(f"{where}: no stage has self_play = true, so the [league] table's "
+                         f"snapshots would never play; mark the stages they join, or drop "
+                         f"[league]")
+
+
 def load_curriculum(name_or_path: str | Path) -> Curriculum:
     """The curriculum of a name in `curriculum/` or of a file path, validated."""
     path = find_curriculum(name_or_path)
@@ -298,10 +331,7 @@ def load_curriculum(name_or_path: str | Path) -> Curriculum:
         raise ValueError(f"{where}: no [[stage]] tables")
     stages = tuple(_stage(f"{where} stage {i + 1}", {**defaults, **table})
                    for i, table in enumerate(tables))
-    for i, stage in enumerate(stages):
-        if stage.self_play and league is None:
-            raise ValueError(f"{where} stage {i + 1}: self_play needs a [league] table "
-                             f"(slots, gate_games, gate_win)")
+    _check_self_play(where, stages, league is not None, data.get("game", "team"))
     return Curriculum(
         name=data.get("name", path.stem),
         path=path,

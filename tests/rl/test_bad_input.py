@@ -6,6 +6,7 @@ import collections
 import json
 import os
 import pickle
+import re
 import socket
 from pathlib import Path
 
@@ -294,3 +295,45 @@ def test_the_cluster_check_reads_what_ray_has_free(ray_session):
     check_cluster_fits(RunSettings(address="auto", num_env_runners=1))
     with pytest.raises(ValueError, match="has 2 free CPUs; the run asks for 3"):
         check_cluster_fits(RunSettings(address="auto", num_env_runners=2))
+
+
+LEAGUE = "[league]\nslots = 2\ngate_games = 4\n"
+
+
+@pytest.mark.parametrize("text, message", [
+    (STAGE.replace('"static"', '"elsewhere/pol.toml"'),
+     "stage 1 key 'opponent': 'elsewhere/pol.toml' is a path; a curriculum names its policies "
+     "by their names in "),
+    (STAGE.replace('"static"', '"pol.toml"'), "'pol.toml' is a path"),
+    (STAGE + 'teammate = "runs/quick"\n', "key 'teammate' (a policy, or 'learner': the trained "
+                                          "one): 'runs/quick' is a path"),
+    ('game = "radio"\n' + STAGE + "self_play = true\n",
+     "stage 1: self_play (snapshots of the learner, Team nets) plays the Team game only, not "
+     "game 'radio'"),
+    (LEAGUE + STAGE, "no stage has self_play = true, so the [league] table's snapshots would "
+                     "never play"),
+    (LEAGUE.replace("slots = 2", "slots = 17") + STAGE + "self_play = true\n",
+     "[league]: slots must be at most 16, got 17"),
+])
+def test_curriculum_cases_of_issue_50_are_one_line_naming_the_file(tmp_path, text, message):
+    """Cases 20, 22, 26 and 28: refused on load, before Ray starts, naming the curriculum."""
+    path = _write(tmp_path, text)
+    with pytest.raises(ValueError) as info:
+        load_curriculum(path)
+    assert str(info.value).startswith(f"curriculum file {path}")
+    assert message in str(info.value) and "\n" not in str(info.value)
+
+
+def test_an_opponents_policy_file_is_checked_as_the_arena_checks_it(tmp_path, monkeypatch):
+    """A learned opponent whose file the arena refuses (temperature nan) is refused when the
+    curriculum loads, naming both files, not after Ray starts (issue 50, case 12)."""
+    policies = tmp_path / "policies"
+    policies.mkdir()
+    (policies / "hot.toml").write_text('kind = "learned"\nweights = "net.pt"\n'
+                                       'temperature = nan\n')
+    monkeypatch.setenv("RLLIB_POMMER_POLICIES", str(policies))
+    path = _write(tmp_path, STAGE.replace('"static"', '"hot"'))
+    with pytest.raises(ValueError, match=re.escape(
+            f"curriculum file {path} stage 1 key 'opponent': policy file {policies / 'hot.toml'}"
+            f": temperature must be a positive number, got nan")):
+        load_curriculum(path)
