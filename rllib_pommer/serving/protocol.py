@@ -119,17 +119,30 @@ class ActionRequest(NamedTuple):
 
 
 def parse_action(body: Mapping[str, Any], agent_id: int, game_type: int) -> ActionRequest:
-    """The observation of `/action` (with its `message` in TeamRadio), for the seat of
-    `/init_agent`. `action_space` is ignored: an agent's move is always one of six."""
+    """The observation of `/action` (with its `message` in TeamRadio), for the seat and game
+    type of `/init_agent`. `action_space` is ignored: an agent's move is always one of six."""
     obs = _decoded(body, "obs")
     try:
         observation = load_observation(obs, agent_id)
+        _check_game_type(observation, agent_id, game_type)
         message = load_words(obs.get("message"), f"observation of agent {agent_id}.message") \
             if has_radio(game_type) else None
     except (ValueError, OverflowError) as exc:
         raise BadRequest(str(exc)) from None
     _check_teammate(obs, observation, agent_id)
     return ActionRequest(observation, message)
+
+
+def _check_game_type(observation: Observation, agent_id: int, game_type: int) -> None:
+    """The game the observation comes from is the one `/init_agent` started: the agent plays
+    by that one (in TeamRadio it hears the message and answers words)."""
+    seen = int(observation.game_type)
+    if seen != game_type:
+        raise BadRequest(
+            f"observation of agent {agent_id} is of game type {seen} ({GameType(seen).name}), "
+            f"but /init_agent started game type {game_type} ({GameType(game_type).name}): "
+            f"start each game with /init_agent of its own type"
+        )
 
 
 def _check_teammate(obs: Mapping[str, Any], observation: Observation, agent_id: int) -> None:

@@ -95,6 +95,23 @@ def test_a_bad_message_in_a_radio_game_is_a_400_naming_the_field(serve, message,
     assert len(post(port, "action", action_body(obs, [1, 2])).json()["action"]) == 3
 
 
+@pytest.mark.parametrize("started, sent, error", [
+    (2, 3, "is of game type 3 (TEAM_RADIO), but /init_agent started game type 2 (TEAM)"),
+    (1, 3, "is of game type 3 (TEAM_RADIO), but /init_agent started game type 1 (FFA)"),
+    (3, 2, "is of game type 2 (TEAM), but /init_agent started game type 3 (TEAM_RADIO)"),
+])
+def test_an_observation_of_another_game_type_is_a_400(serve, started, sent, error):
+    """The agent plays the game `/init_agent` started: a TeamRadio observation in a Team game
+    would get a plain move, its words unheard (issue 50, case 21)."""
+    port, (obs, message) = serve("simple_words"), radio_observations(1)[0]
+    post(port, "init_agent", {"id": str(SEAT), "game_type": str(started)})
+    body = action_body(obs._replace(game_type=np.int32(sent)), message if sent == RADIO else None)
+    response = post(port, "action", body)
+    assert response.status_code == 400
+    assert response.json()["error"] == (f"observation of agent {SEAT} {error}: start each game "
+                                        f"with /init_agent of its own type")
+
+
 def test_our_client_sends_the_message_and_takes_the_words(serve):
     received, asked = [], []
     port = serve(fake_remote((200, '{"action": [2, 3, 4]}'), (200, '{"action": 1}'),
