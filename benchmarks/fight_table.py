@@ -156,10 +156,6 @@ def main(argv: list[str] | None = None) -> int:
     except (ValueError, OSError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print(f"interrupted: the cells finished are kept in {args.out}; run the same command "
-              f"to resume", file=sys.stderr)
-        return 130
     print(table)
     return 0
 

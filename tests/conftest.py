@@ -3,6 +3,7 @@ so every clone proves the engine's fidelity; tests/reference/README.md says what
 
 from __future__ import annotations
 
+import importlib.util
 from pathlib import Path
 
 import pytest
@@ -13,6 +14,14 @@ PUBLIC_GAMES = REFERENCE_DIR / "games_public.jsonl.gz"
 RADIO_GAMES = REFERENCE_DIR / "radio" / "games_radio_public.jsonl.gz"
 DECISIONS = REFERENCE_DIR / "simpleagent_decisions_public.json"
 PAPER_TABLES = REFERENCE_DIR / "paper_tables.tex"
+
+
+def benchmark_main(name: str):
+    """The `main` of `benchmarks/<name>.py`, loaded from its file (benchmarks/ is no package)."""
+    spec = importlib.util.spec_from_file_location(name, REPO_ROOT / "benchmarks" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.main
 
 
 @pytest.fixture(scope="session")

@@ -6,20 +6,16 @@ games, one worker."""
 from __future__ import annotations
 
 import gzip
-import importlib.util
 from pathlib import Path
 
 import pytest
 
-SCRIPT = Path(__file__).resolve().parents[1] / "benchmarks" / "fight_table.py"
+from .conftest import benchmark_main
 
 
 @pytest.fixture(scope="module")
 def fight_table():
-    spec = importlib.util.spec_from_file_location("fight_table", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module.main
+    return benchmark_main("fight_table")
 
 
 def _args(out: Path, teams=("static",), vs=("static",), games: int = 2) -> list[str]:

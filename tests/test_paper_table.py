@@ -5,20 +5,16 @@ and 12). Cells of 2 games against `static`, one worker."""
 from __future__ import annotations
 
 import gzip
-import importlib.util
 from pathlib import Path
 
 import pytest
 
-SCRIPT = Path(__file__).resolve().parents[1] / "benchmarks" / "paper_table.py"
+from .conftest import benchmark_main
 
 
 @pytest.fixture(scope="module")
 def paper_table():
-    spec = importlib.util.spec_from_file_location("paper_table", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module.main
+    return benchmark_main("paper_table")
 
 
 def _args(out: Path, games: int = 2, seed: int = 0) -> list[str]:
