@@ -1,15 +1,17 @@
 """`python -m rllib_pommer.ladder --out DIR [--policies a,b,c] [--games N] [--seed S]`: a ladder.
 
 Plays every pair of the policies (default: every policy in policies/ that plays here, and each
-learned one also with both filters, `_jitter_action`) for N games (even: seats balanced), and
-rates them: DIR/ladder.md (the table: rating, 95% interval, games, wins / losses / ties),
-DIR/ladder.json (the same and each pair's results) and DIR/ladder.png (ratings with their
-intervals). Each pair's games are kept as arena records, DIR/records/<a>__vs__<b>.jsonl.gz, as
-soon as its match ends, and DIR/records/played.json keeps N, the seed and a digest of each
-policy's file and weights. Running the command again resumes: pairs played with the same N and
-seed are kept and a new policy plays only its new pairs; another N or seed, a damaged pair file
-and the pairs of a policy changed since they were played are refused, naming what. The model,
-the scale, the intervals and what is refused: rllib_pommer/arena/ladder.py.
+learned one also with both filters, `_jitter_action`) for N games (even: seats balanced), and rates
+them: DIR/ladder.md (the table: rating, 95% interval, games, wins / losses / ties), DIR/ladder.json
+(the same and each pair's results) and DIR/ladder.png (ratings with their intervals), and a second
+view, the same games fitted over the policies that play without the paper's filters only
+(DIR/ladder_no_filters.json and .png, its table in ladder.md), so that no place comes from a
+filtered variant of one agent. Each pair's games are kept as arena records,
+DIR/records/<a>__vs__<b>.jsonl.gz, as soon as its match ends, and DIR/records/played.json keeps N,
+the seed and a digest of each policy's file and weights. Running the command again resumes: pairs
+played with the same N and seed are kept and a new policy plays only its new pairs; another N or
+seed, a damaged pair file and the pairs of a policy changed since they were played are refused,
+naming what. The model, the scale, the intervals and what is refused: rllib_pommer/arena/ladder.py.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from tqdm import tqdm
 from .arena.ladder import (
     BOOTSTRAP,
     LADDER_FILE,
+    PLAIN_LADDER_FILE,
     Ladder,
     default_policies,
     rate,
@@ -34,7 +37,7 @@ from .arena.ladder import (
 from .arena.match import play_match
 from .util.cli_options import non_negative_int, positive_int
 from .util.outputs import check_output_dir
-from .viz.ladder import draw_ladder
+from .viz.ladder import draw_ladders
 
 
 def _names(text: str) -> tuple[str, ...]:
@@ -89,8 +92,13 @@ def main(argv: list[str] | None = None) -> int:
         args.out.mkdir(parents=True, exist_ok=True)
         played = play(ladder, args.out, args.workers)
         write_ladder(args.out / LADDER_FILE, ladder, rate(ladder, played), played)
-        picture, table = draw_ladder(args.out, args.out)
-        (args.out / "ladder.md").write_text(f"# Ladder\n\n{picture}\n\n{table}\n")
+        plain = ladder.without_filters()
+        if plain is not None:  # the second view: the same games, no filtered variants
+            write_ladder(args.out / PLAIN_LADDER_FILE, plain, rate(plain, played), played)
+        else:
+            (args.out / PLAIN_LADDER_FILE).unlink(missing_ok=True)
+        parts = list(draw_ladders(args.out, args.out))
+        (args.out / "ladder.md").write_text("# Ladder\n\n" + "\n\n".join(parts) + "\n")
     except (ValueError, OSError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
@@ -98,8 +106,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f"interrupted: the pairs finished are kept in {args.out}; run the same command "
               f"to resume", file=sys.stderr)
         return 130
-    print(table)
-    print(f"wrote {args.out / 'ladder.md'}, {LADDER_FILE} and ladder.png")
+    print("\n\n".join(part for part in parts if not part.startswith("![")))
+    print(f"wrote {args.out / 'ladder.md'}, {LADDER_FILE} and ladder.png"
+          + (f", {PLAIN_LADDER_FILE} and ladder_no_filters.png" if plain else ""))
     return 0
 
 

@@ -51,7 +51,7 @@ import math
 import os
 from collections import Counter
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 import choix
@@ -65,6 +65,7 @@ from .records import RECORDS_SUFFIX, GameRecord, game_record, write_records
 RECORDS_DIR = "records"
 PLAYED_FILE = "played.json"  # in RECORDS_DIR: the games, seed and digests pairs were played with
 LADDER_FILE = "ladder.json"
+PLAIN_LADDER_FILE = "ladder_no_filters.json"  # the fit over the policies without filters
 VERSUS = "__vs__"  # between the two names of a pair's file
 FILTERED = "_jitter_action"  # the variant of each learned policy a default ladder also rates
 ELO = 400 / math.log(10)  # Elo points per unit of Bradley-Terry strength
@@ -111,6 +112,13 @@ class Ladder:
 
     def match(self, pair: Pair) -> MatchSpec:
         return MatchSpec(pair[0], pair[1], self.games, self.seed)
+
+    def without_filters(self) -> Ladder | None:
+        """The same ladder over its policies that play without the paper's filters (no filter
+        suffix in their names): a second view in which a top place cannot come from a filtered
+        variant of the same agent. None when fewer than two are left."""
+        plain = tuple(name for name in self.policies if not resolve_policy(name).filters)
+        return replace(self, policies=plain) if len(plain) >= 2 else None
 
 
 def default_policies() -> list[str]:

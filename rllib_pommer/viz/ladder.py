@@ -8,7 +8,7 @@ from pathlib import Path
 
 from matplotlib.figure import Figure
 
-from ..arena.ladder import LADDER_FILE, Standing, read_ladder
+from ..arena.ladder import LADDER_FILE, PLAIN_LADDER_FILE, Standing, read_ladder
 from .figures import DPI
 
 
@@ -47,19 +47,30 @@ def plot_ladder(standings: Sequence[Standing], title: str, out: Path) -> Figure:
     return fig
 
 
-def draw_ladder(folder: Path, out: Path, name: str = "ladder.png") -> tuple[str, str]:
-    """The ladder of `folder` (its ladder file) plotted as `out`/`name`: the Markdown of the
+def draw_ladder(folder: Path, out: Path, name: str = "ladder.png",
+                file: str = LADDER_FILE) -> tuple[str, str]:
+    """The ladder of `folder` (its ladder `file`) plotted as `out`/`name`: the Markdown of the
     picture, and the table."""
-    settings, standings = read_ladder(folder / LADDER_FILE)
-    plot_ladder(standings, f"Ladder: {settings['games_per_pair']} games a pair, "
+    settings, standings = read_ladder(folder / file)
+    view = " (policies without filters)" if file == PLAIN_LADDER_FILE else ""
+    plot_ladder(standings, f"Ladder{view}: {settings['games_per_pair']} games a pair, "
                            f"seed {settings['seed']}", out / name)
-    return f"![the ladder]({name})", ladder_table(settings, standings)
+    return f"![the ladder{view}]({name})", ladder_table(settings, standings)
+
+
+def draw_ladders(folder: Path, out: Path, stem: str = "ladder") -> Iterator[str]:
+    """The folder's ladder, then its view without filters where the ladder has one (each a
+    picture and a table, PNGs into `out`)."""
+    yield from draw_ladder(folder, out, f"{stem}.png")
+    if (folder / PLAIN_LADDER_FILE).is_file():
+        yield ("The same games, fitted over the policies that play without the paper's "
+               "filters only, so that no place comes from a filtered variant of one agent:")
+        yield from draw_ladder(folder, out, f"{stem}_no_filters.png", PLAIN_LADDER_FILE)
 
 
 def ladder_section(folders: list[Path], out: Path) -> Iterator[str]:
-    """The report's section: each ladder folder's plot (PNG into `out`) and table."""
+    """The report's section: each ladder folder's plots (PNGs into `out`) and tables."""
     yield "## The ladder"
     for k, folder in enumerate(folders):
         yield f"From `{folder}`:"
-        yield from draw_ladder(folder, out,
-                               "ladder.png" if len(folders) == 1 else f"ladder_{k}.png")
+        yield from draw_ladders(folder, out, "ladder" if len(folders) == 1 else f"ladder_{k}")

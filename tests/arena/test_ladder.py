@@ -16,6 +16,7 @@ from PIL import Image
 from rllib_pommer.agents.registry import policy_names
 from rllib_pommer.arena.ladder import (
     LADDER_FILE,
+    PLAIN_LADDER_FILE,
     PLAYED_FILE,
     RECORDS_DIR,
     Ladder,
@@ -147,6 +148,28 @@ def test_a_ladder_plays_resumes_and_adds_only_new_pairs(tmp_path, capsys):
         capsys.readouterr().out
     grown = _files(out)
     assert len(grown) == 6 and {name: grown[name] for name in files} == files
+
+
+def test_the_view_without_filters_fits_the_same_games_over_unfiltered_policies(tmp_path, capsys):
+    ladder = Ladder(("simple_action", "static", "simple"), 2)
+    assert ladder.without_filters().policies == ("simple", "static")
+    assert Ladder(("simple_action", "static_jitter_action"), 2).without_filters() is None
+    out = tmp_path / "ladder"
+    assert main(["--policies", "static,simple,simple_action", "--games", "4", "--workers", "1",
+                 "--bootstrap", "20", "--out", str(out)]) == 0
+    full = json.loads((out / LADDER_FILE).read_text())
+    plain = json.loads((out / PLAIN_LADDER_FILE).read_text())
+    assert sorted(s["policy"] for s in plain["standings"]) == ["simple", "static"]
+    assert [(p["team"], p["vs"]) for p in plain["pairs"]] == [("simple", "static")]
+    (pair,) = [p for p in full["pairs"] if (p["team"], p["vs"]) == ("simple", "static")]
+    assert plain["pairs"][0] == pair  # the same games, fitted again
+    assert all(s["games"] == 4 for s in plain["standings"])
+    table = (out / "ladder.md").read_text()
+    assert "![the ladder (policies without filters)](ladder_no_filters.png)" in table
+    assert table.count("| 1 | `") == 2
+    assert PLAIN_LADDER_FILE in capsys.readouterr().out
+    with Image.open(out / "ladder_no_filters.png") as image:
+        assert np.asarray(image.convert("L")).std() > 10
 
 
 LADDER = ["--policies", "static,simple_nobomb", "--games", "4", "--workers", "1",
