@@ -5,6 +5,10 @@ The server plays one seat at a time: a team needs two servers on two ports. It b
 unless `--host` says otherwise (use `--host 0.0.0.0` only inside a container). The first line on
 stdout is `serving NAME on http://HOST:PORT` (with `--port 0` the port is picked by the system).
 
+The command exits as soon as the server stops (/shutdown, SIGINT or SIGTERM), skipping the
+interpreter's teardown of torch and numba, which takes seconds on a busy machine while whoever
+stopped the server waits for the process to end.
+
 Seeds: a caller may add `"seed"` to /init_agent (our extension; an integer, or a numpy bit-generator
 state, which is what our arena's `http` policies send). Otherwise game k started by this server
 (counting /init_agent and /episode_end) seeds the agent with `default_rng([--seed, k])`.
@@ -14,8 +18,10 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import os
 import sys
 import time
+from typing import NoReturn
 
 import torch
 
@@ -55,7 +61,14 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as exc:
         print(f"error: cannot serve on {args.host}:{args.port} ({exc})", file=sys.stderr)
         return 2
-    return 0
+    _exit_at_once()
+
+
+def _exit_at_once() -> NoReturn:
+    """End the process with status 0 now that the server has stopped (module docstring)."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(0)
 
 
 if __name__ == "__main__":

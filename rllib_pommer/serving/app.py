@@ -56,15 +56,18 @@ async def _mark_answering(request: web.Request, handler: Handler) -> web.StreamR
         answering.discard(request.protocol)
 
 
-async def _body(request: web.Request):
+async def _read(request: web.Request) -> bytes:
     seconds = request.app[READ_TIMEOUT]
     try:
         async with asyncio.timeout(seconds):
-            data = await request.read()
+            return await request.read()
     except TimeoutError:
         raise web.HTTPRequestTimeout(
             text=f"request body not received within {seconds:g} s") from None
-    return parse_body(data)
+
+
+async def _body(request: web.Request):
+    return parse_body(await _read(request))
 
 
 async def ping(request: web.Request) -> web.Response:
@@ -92,7 +95,10 @@ async def episode_end(request: web.Request) -> web.Response:
 
 
 async def shutdown(request: web.Request) -> web.Response:
-    """Answers first: whoever runs the server stops it once `STOP` is set."""
+    """Answers first: whoever runs the server stops it once `STOP` is set. The body, whatever
+    it holds, is read: aiohttp would otherwise keep the connection open to drain it, and the
+    server's stop would wait for that, up to 10 s."""
+    await _read(request)
     request.app[STOP].set()
     return web.json_response(SUCCESS)
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import socket
 import subprocess
 import sys
 
@@ -150,6 +151,37 @@ def test_the_command_serves_until_shutdown():
             assert server.wait(timeout=20) == 0
         finally:
             server.kill()
+
+
+def test_the_command_exits_at_once_after_shutdown():
+    """Once the server stops, the process ends without the interpreter's teardown (torch and
+    numba take seconds to tear down on a busy machine): here an exit hook that would sleep a
+    minute must never run."""
+    hooked = ("import atexit, sys, time; atexit.register(time.sleep, 60); "
+              "from rllib_pommer.serve import main; sys.exit(main(sys.argv[1:]))")
+    command = [sys.executable, "-c", hooked, "--policy", "static", "--port", "0"]
+    with subprocess.Popen(command, stdout=subprocess.PIPE, text=True) as server:
+        try:
+            port = int(server.stdout.readline().rsplit(":", 1)[1])
+            assert post(port, "shutdown", {}).json() == {"success": True}
+            assert server.wait(timeout=20) == 0
+        finally:
+            server.kill()
+
+
+def test_shutdown_reads_its_body_before_answering(serve):
+    """A /shutdown answered before its body was read leaves aiohttp draining the connection
+    for up to 10 s, and the server's stop waits for it: the body is read first."""
+    port = serve("static")
+    with socket.create_connection(("127.0.0.1", port), timeout=5) as sock:
+        sock.sendall(b"POST /shutdown HTTP/1.1\r\nHost: localhost\r\n"
+                     b"Content-Type: application/json\r\nContent-Length: 2\r\n\r\n")
+        sock.settimeout(0.5)
+        with pytest.raises(TimeoutError):
+            sock.recv(100)  # no answer while the body is still to come
+        sock.settimeout(5)
+        sock.sendall(b"{}")
+        assert sock.recv(100).startswith(b"HTTP/1.1 200")
 
 
 def test_the_command_rejects_unknown_policies(capsys):
