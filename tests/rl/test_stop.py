@@ -15,7 +15,7 @@ import textwrap
 import time
 from pathlib import Path
 
-from rllib_pommer.rl.checkpoint_policy import checkpoint_iteration
+from rllib_pommer.rl.checkpoint_policy import ALGORITHM_STATE, MODULE_STATE, checkpoint_iteration
 from rllib_pommer.rl.packing import STOP_REQUEST, stop_run
 
 REPO = Path(__file__).resolve().parents[2]
@@ -27,9 +27,9 @@ STAND_IN = textwrap.dedent("""
     import json, os, pickle, signal, sys, time
     from pathlib import Path
     from rllib_pommer.rl import ray_session
-    from rllib_pommer.rl.checkpoint_policy import ALGORITHM_STATE, MODULE_STATE
 
     out, period, late = Path(sys.argv[1]), float(sys.argv[2]), sys.argv[3] == "late"
+    ALGORITHM_STATE, MODULE_STATE = sys.argv[4:6]
     trial = out / "PPO_stand_in"
     trial.mkdir(parents=True)
     (trial / "params.json").write_text("{}")
@@ -64,8 +64,9 @@ STAND_IN = textwrap.dedent("""
 
 def _stand_in(out: Path, late: bool, period: float = 0.6) -> subprocess.Popen:
     process = subprocess.Popen([sys.executable, "-c", STAND_IN, str(out), str(period),
-                                "late" if late else "prompt"], cwd=REPO)
-    deadline = time.monotonic() + 30
+                                "late" if late else "prompt", ALGORITHM_STATE, str(MODULE_STATE)],
+                               cwd=REPO)
+    deadline = time.monotonic() + 120
     while not (out / "ray_session.json").is_file():
         assert process.poll() is None and time.monotonic() < deadline
         time.sleep(0.05)
