@@ -140,13 +140,13 @@ def policy_digest(name: str) -> str:
     reworded description does not; a filter suffix is not part of it (the name is)."""
     spec = resolve_policy(name)
     digest = hashlib.sha256(json.dumps([spec.kind, spec.params], sort_keys=True).encode())
-    for key, value in sorted(spec.params.items()):
-        if isinstance(value, str) and spec.file(key).exists():
-            path = spec.file(key)
-            files = sorted(p for p in path.rglob("*") if p.is_file()) if path.is_dir() else [path]
-            for file in files:
-                digest.update(file.relative_to(path.parent).as_posix().encode() + b"\0"
-                              + file.read_bytes())
+    paths = [spec.file(key) for key, value in sorted(spec.params.items())
+             if isinstance(value, str)]
+    for path in (path for path in paths if path.exists()):
+        files = sorted(p for p in path.rglob("*") if p.is_file()) if path.is_dir() else [path]
+        for file in files:
+            digest.update(file.relative_to(path.parent).as_posix().encode() + b"\0"
+                          + file.read_bytes())
     return digest.hexdigest()
 
 
@@ -219,9 +219,9 @@ def _check_unchanged(folder: Path, kept: Mapping[str, str], digests: Mapping[str
         if files:
             raise ValueError(
                 f"policy {name!r} changed since its pairs in {folder / RECORDS_DIR} were played "
-                f"(its policy file's keys or weights differ from those {PLAYED_FILE} keeps): its "
-                f"{len(files)} pair files ({files[0].name}, ...) rate play it no longer does; "
-                f"delete them to play its pairs again, or use another --out")
+                f"(its file's keys or weights differ from the digest {PLAYED_FILE} keeps), so "
+                f"their games are not its play now: delete its {len(files)} pair files "
+                f"({files[0].name}, ...) to play them again, or use another --out")
 
 
 def resume(ladder: Ladder, folder: Path) -> dict[Pair, list[GameRecord]]:

@@ -264,7 +264,7 @@ def test_the_pairs_of_a_changed_policy_are_refused_naming_it(tmp_path, capsys, m
         assert main(argv) == 2
         err = capsys.readouterr().err
         assert err.count("error:") == 1 and "policy 'mine' changed since its pairs in" in err
-        assert "its 1 pair files (mine__vs__static.jsonl.gz, ...)" in err
+        assert "delete its 1 pair files (mine__vs__static.jsonl.gz, ...) to play them" in err
         assert len(played) == 1
 
     pair_path(out, ("mine", "static")).unlink()
