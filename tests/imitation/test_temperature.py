@@ -46,10 +46,11 @@ def _agent(path: str, seed: int = 0):
     return agent
 
 
-@pytest.mark.parametrize("temperature", ["0.001", "1e-300", "1e-320"])
+@pytest.mark.parametrize("temperature", ["0.001", "1e-300", "1e-307"])
 def test_a_cold_policy_plays_its_most_likely_move(tmp_path, temperature):
     """As T -> 0 the moves are the greedy ones, also where logits / T overflows float32 and
-    float64 (issue 50, case 11: NaN probabilities, Stop every step)."""
+    float64 (issue 50, case 11: NaN probabilities, Stop every step). Normal doubles only: a
+    subnormal T reads as 0 in a process where torch flushes denormals (the trainers do)."""
     observations = team_observations(SEAT, 12, 4, TEAM_PRESET)
     cold = _agent(_policy(tmp_path, temperature))
     batch = type(observations[0])(*(np.stack(f) for f in zip(*observations, strict=True)))
