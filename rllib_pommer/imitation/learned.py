@@ -28,6 +28,7 @@ until then, and always in Team) and speaks the net's two words. A Team network s
 
 from __future__ import annotations
 
+import sys
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 from functools import cache
@@ -120,10 +121,14 @@ class LearnedPolicy:
         so that its largest logit is 0, then divided by the temperature in float64. That gives
         the probabilities of logits / T, and stays finite for any positive T: every value is at
         most 0 before the division and the largest stay 0, so as T -> 0 all the mass goes to
-        the most likely choice (where logits / T itself would overflow into NaN)."""
+        the most likely choice (where logits / T itself would overflow into NaN). A T below the
+        smallest normal double divides as that one does, whose distributions are already the
+        most likely choice alone: torch reads a subnormal divisor as 0 where it flushes
+        denormals (the trainers do)."""
         sizes = [NUM_ACTIONS] + [RADIO_VOCAB_SIZE] * RADIO_NUM_WORDS * self.radio
         parts = logits.double().split(sizes, dim=-1)
-        shifted = [(part - part.amax(-1, keepdim=True)) / self.temperature for part in parts]
+        divisor = max(self.temperature, sys.float_info.min)
+        shifted = [(part - part.amax(-1, keepdim=True)) / divisor for part in parts]
         return torch.cat(shifted, -1).to(logits.dtype)
 
     def choose(self, probs: np.ndarray, rngs: Sequence[np.random.Generator]) -> np.ndarray:

@@ -46,13 +46,23 @@ def _agent(path: str, seed: int = 0):
     return agent
 
 
-@pytest.mark.parametrize("temperature", ["0.001", "1e-300", "1e-307"])
+@pytest.mark.parametrize("temperature", ["0.001", "1e-300", "1e-307", "1e-320"])
 def test_a_cold_policy_plays_its_most_likely_move(tmp_path, temperature):
     """As T -> 0 the moves are the greedy ones, also where logits / T overflows float32 and
-    float64 (issue 50, case 11: NaN probabilities, Stop every step). Normal doubles only: a
-    subnormal T reads as 0 in a process where torch flushes denormals (the trainers do)."""
+    float64 (issue 50, case 11: NaN probabilities, Stop every step), and for a subnormal T,
+    also where torch flushes denormals (the trainers do), reading such a divisor as 0."""
     observations = team_observations(SEAT, 12, 4, TEAM_PRESET)
     cold = _agent(_policy(tmp_path, temperature))
+    flushing = torch.tensor(5e-324, dtype=torch.float64).mul(1.0).item() == 0.0  # as it was
+    torch.set_flush_denormal(True)
+    try:
+        _plays_greedily(cold, observations)
+    finally:
+        torch.set_flush_denormal(flushing)
+    _plays_greedily(cold, observations)
+
+
+def _plays_greedily(cold, observations) -> None:
     batch = type(observations[0])(*(np.stack(f) for f in zip(*observations, strict=True)))
     greedy = cold.policy.logits(batch).argmax(-1).numpy()
     assert (greedy != 0).any()  # so that Stop every step (NaN probabilities) is told apart
@@ -69,7 +79,7 @@ def test_a_radio_nets_move_and_words_are_tempered_one_by_one():
                          generator=torch.Generator().manual_seed(0))
     logits[:, NUM_ACTIONS:] -= 50.0  # words far below every move
     sizes = [NUM_ACTIONS] + [RADIO_VOCAB_SIZE] * RADIO_NUM_WORDS
-    for temperature in (0.5, 1e-300):
+    for temperature in (0.5, 1e-300, 5e-324):
         policy = LearnedPolicy(RadioNet(), Path("radio.pt"), Acting(False, temperature))
         tempered = policy.temper(logits).split(sizes, dim=-1)
         for part, raw in zip(tempered, logits.split(sizes, dim=-1), strict=True):
