@@ -22,7 +22,7 @@ from rllib_pommer.rl.mapping import SeatMapping
 from rllib_pommer.rl.matchmaking import Record, WeightedTurns, priority, shares
 from rllib_pommer.rl.names import EXPLOITER, LEARNER
 
-from .test_self_play import SELF_PLAY_SMOKE
+from .test_self_play import SELF_PLAY_SMOKE, _same
 
 PRIORITIZED_SMOKE = SELF_PLAY_SMOKE.replace(
     "gate_win = 0.5\n", 'gate_win = 0.5\nmatchmaking = "prioritized"\npriority_halflife = 50\n')
@@ -154,11 +154,6 @@ EXPLOITER_SMOKE = PRIORITIZED_SMOKE.replace(
     "exploiter_gate_games = 100000\nexploiter_gate_win = 0.5\n").replace(
     'opponent = ["suicide", "static_action"]', 'opponent = ["suicide"]').replace(
     "gate_games = 4\n", "gate_games = 100000\n")
-
-
-def _same(a, b) -> bool:
-    return all(torch.equal(x, y) for x, y in zip(a.state_dict().values(),
-                                                 b.state_dict().values(), strict=True))
 
 
 def test_an_exploiter_trains_against_the_learner_alone_and_its_pi_joins_the_league(
