@@ -130,7 +130,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.records:
             write_records(args.records, records)
-        if args.record > 0:
+        if replays:
             count = write_games(replays,
                                 record_games(spec, args.record, args.with_observations))
             print(f"  wrote {count} replays to {replays}")
