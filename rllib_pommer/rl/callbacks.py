@@ -164,17 +164,26 @@ class CurriculumCallback(RLlibCallback):
         return (league is not None and league.prioritized
                 and (stage.self_play or isinstance(stage.opponent, tuple)))
 
+    def _opponent(self, algorithm, stage):
+        """Who the learner meets in `stage`: its opponent or league, and in a self-play stage
+        also the exploiter and the filled snapshot slots."""
+        if not stage.self_play:
+            return stage.opponent
+        return (*stage.opponents, *self._exploiter(), *members(self._book(algorithm)))
+
+    def _priorities(self, records: dict, opponent: tuple[str, ...]) -> list[float]:
+        """Each member's matchmaking weight (rl/matchmaking.py) from the book's `records`."""
+        league = self.curriculum.league
+        return [priority(records[name], league.priority_power, league.priority_floor)
+                for name in opponent]
+
     def apply_stage(self, algorithm, episodes: int) -> int:
         index = self.curriculum.stage_at(episodes)
         stage = self.curriculum.stages[index]
-        opponent = stage.opponent
-        if stage.self_play:
-            opponent = (*stage.opponents, *self._exploiter(), *members(self._book(algorithm)))
+        opponent = self._opponent(algorithm, stage)
         weights = None
         if self._matched(stage):
-            league, records = self.curriculum.league, self._records(algorithm)
-            weights = tuple(priority(records[name], league.priority_power, league.priority_floor)
-                            for name in opponent)
+            weights = tuple(self._priorities(self._records(algorithm), opponent))
         mapping = SeatMapping(index, stage.teammate, opponent, weights)
         env_settings = {"reward": stage.reward, "action_filter": stage.action_filter,
                         "jitter": stage.jitter}
@@ -228,9 +237,8 @@ class CurriculumCallback(RLlibCallback):
 
     def _matchmaking(self, algorithm, opponent: tuple[str, ...]) -> dict:
         """Each member's share of the coming games, win-rate estimate and decayed games."""
-        league, records = self.curriculum.league, self._records(algorithm)
-        weights = [priority(records[name], league.priority_power, league.priority_floor)
-                   for name in opponent]
+        records = self._records(algorithm)
+        weights = self._priorities(records, opponent)
         return {name: {"share": weight / sum(weights), "win_rate": records[name].win_rate,
                        "games": records[name].games}
                 for name, weight in zip(opponent, weights, strict=True)}
@@ -284,8 +292,7 @@ class CurriculumCallback(RLlibCallback):
         index = self.apply_stage(algorithm, episodes)
         stage = self.curriculum.stages[index]
         if self._matched(stage):
-            book = members(self._book(algorithm)) if stage.self_play else ()
-            result["matchmaking"] = self._matchmaking(algorithm, (*stage.opponents, *book))
+            result["matchmaking"] = self._matchmaking(algorithm, self._opponent(algorithm, stage))
         finished = episodes >= self.curriculum.total_episodes  # the run stops after this one
         ended = self.curriculum.stages[before].name if before != index or finished else None
         if ended:

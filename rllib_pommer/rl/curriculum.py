@@ -62,7 +62,6 @@ from ..game.constants import PRESETS, TEAM_PRESET, has_teams
 from ..game.rewards import REWARD_MODES
 from ..util.shipped import data_dir
 from ..util.toml_values import fits
-from .matchmaking import MATCHMAKING
 from .names import EXPLOITER, LEARNER
 from .settings import LeagueSettings, PPOSettings
 
@@ -209,10 +208,12 @@ def _check_options(where: str, table: dict, options: dict) -> None:
     """A table of bounded options (`PPOSettings.options()`, `LeagueSettings.options()`)."""
     _check_keys(where, table, options)
     for key, value in table.items():
-        kind, low, high = options[key]
+        kind, low, high, choices = options[key]
         _check_type(where, key, value, kind, positive=kind is int)
         if (low is not None and not value > low) or (high is not None and not value <= high):
             raise ValueError(f"{where}: {key} must be {_bounds(low, high)}, got {value!r}")
+        if choices is not None and value not in choices:
+            raise ValueError(f"{where}: {key} {value!r} is not one of {list(choices)}")
 
 
 def _bounds(low: float | None, high: float | None) -> str:
@@ -318,9 +319,6 @@ def load_curriculum(name_or_path: str | Path) -> Curriculum:
     league = data.get("league")
     if league is not None:
         _check_options(f"{where} [league]", league, LeagueSettings.options())
-        if league.get("matchmaking", "uniform") not in MATCHMAKING:
-            raise ValueError(f"{where} [league]: matchmaking {league['matchmaking']!r} is not "
-                             f"one of {list(MATCHMAKING)}")
         if data.get("game", "team") != "team":
             raise ValueError(f"{where}: a [league] (self-play snapshots) plays the Team game "
                              f"only, not game {data['game']!r}")

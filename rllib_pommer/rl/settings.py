@@ -19,21 +19,27 @@ import typing
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from .matchmaking import MATCHMAKING
 
-def _option(default, low=None, high=None, key: str | None = None):
-    """A field a curriculum's [ppo] table may set under `key` (default: the field's name), with
-    values in (low, high]; integers must be positive."""
-    return field(default=default, metadata={"option": key, "range": (low, high)})
+
+def _option(default, low=None, high=None, key: str | None = None,
+            choices: tuple[str, ...] | None = None):
+    """A field a curriculum's table may set under `key` (default: the field's name), with
+    values in (low, high], or one of `choices`; integers must be positive."""
+    return field(default=default, metadata={"option": key, "range": (low, high),
+                                            "choices": choices})
 
 
 class TableSettings:
     """Settings a curriculum's table may set, field by field (`_option` fields)."""
 
     @classmethod
-    def options(cls) -> dict[str, tuple[type, float | None, float | None]]:
-        """{key in the table: (type, low, high)} of every overridable field."""
+    def options(cls) -> dict[str, tuple[type, float | None, float | None,
+                                        tuple[str, ...] | None]]:
+        """{key in the table: (type, low, high, choices)} of every overridable field."""
         hints = typing.get_type_hints(cls)
-        return {f.metadata["option"] or f.name: (hints[f.name], *f.metadata["range"])
+        return {f.metadata["option"] or f.name: (hints[f.name], *f.metadata["range"],
+                                                 f.metadata["choices"])
                 for f in dataclasses.fields(cls) if "option" in f.metadata}
 
     @classmethod
@@ -79,7 +85,7 @@ class LeagueSettings(TableSettings):
     # "uniform": members take turns in order; "prioritized": by how often the learner fails
     # to beat each, max(floor, (1 - win rate) ** power), records halving every `halflife`
     # games against the member.
-    matchmaking: str = _option("uniform")
+    matchmaking: str = _option("uniform", choices=MATCHMAKING)
     priority_power: float = _option(2.0, low=0)
     priority_floor: float = _option(0.1, low=0, high=1)
     priority_halflife: int = _option(100)
