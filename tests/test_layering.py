@@ -26,35 +26,15 @@ def _loaded(modules: list[str], heavy: tuple[str, ...], then: str = "") -> str:
                           check=True).stdout.strip()
 
 
-@pytest.mark.parametrize("modules", [
-    ["rllib_pommer.game.engine", "rllib_pommer.game.records", "rllib_pommer.game.verify",
-     "rllib_pommer.game.invariants", "rllib_pommer.game.raw_codec"],
-    ["rllib_pommer.agents.registry", "rllib_pommer.agents.action_filter",
-     "rllib_pommer.agents.scripted"],
-    ["rllib_pommer.data.collector", "rllib_pommer.data.dagger", "rllib_pommer.data.dataset"],
-])
-def test_lower_layers_do_not_import_ray_torch_or_gymnasium(modules):
-    assert _loaded(modules, ("ray", "torch", "gymnasium")) == ""
-
-
 def _package_modules(package: str) -> list[str]:
     return [f"rllib_pommer.{package}.{path.stem}"
             for path in sorted((PACKAGE / package).glob("*.py")) if path.stem != "__init__"]
-
-
-def test_imitation_and_arena_code_do_not_import_ray():
-    """Every module of imitation/ and arena/, and the jobs over them."""
-    modules = (_package_modules("imitation") + _package_modules("arena")
-               + ["rllib_pommer.imitate", "rllib_pommer.collect", "rllib_pommer.evaluate"])
-    assert "rllib_pommer.imitation.speed" in modules and "rllib_pommer.arena.match" in modules
-    assert _loaded(modules, ("ray",)) == ""
 
 
 def test_util_is_standard_library_only():
     """util/ may be imported from any layer, so it brings in nothing: no third-party package and
     no module of ours outside util/."""
     modules = _package_modules("util")
-    assert len(modules) == 6
     code = (f"import sys\nbefore = set(sys.modules)\nimport {', '.join(modules)}\n"
             "print(','.join(sorted(m for m in set(sys.modules) - before "
             "if m.split('.')[0] not in sys.stdlib_module_names "
@@ -95,10 +75,7 @@ def test_curricula_are_checked_without_ray_or_torch(tmp_path):
     assert _loaded(modules, ("ray", "torch", "gymnasium"), check) == ""
 
 
-def test_runs_are_reported_without_ray():
-    """The run history (rl/history.py) is read without Ray or torch, like the curriculum, and the
-    report job that reads it runs without Ray."""
-    assert _loaded(["rllib_pommer.rl.history"], ("ray", "torch")) == ""
+def test_the_report_job_runs_without_ray():
     assert _loaded(["rllib_pommer.report"], ("ray",)) == ""
 
 
@@ -245,3 +222,122 @@ def test_test_folders_mirror_the_packages():
     assert folders <= packages, sorted(folders - packages)
     assert {"arena", "envs", "imitation", "util"} <= folders
 
+
+
+# The map's other two sections: what each package may load, and every module with its job.
+
+LOAD_HEADING = "## What each package may load"
+MODULES_HEADING = "## Every module"
+
+
+def _section(doc: Path, heading: str) -> str:
+    """The text of `doc` under `heading`, up to the next heading of the same level."""
+    return doc.read_text().split(heading + "\n", 1)[1].split("\n## ", 1)[0]
+
+
+def load_table(doc: Path) -> list[tuple[list[str], dict[str, bool]]]:
+    """The rows of the table under `LOAD_HEADING`: the modules each names (`game/` a package,
+    `rl/names` a module) and, per heavy package of the header, whether they may load it."""
+    lines = [line for line in _section(doc, LOAD_HEADING).splitlines() if line.startswith("|")]
+    heavy = [cell.strip().lower() for cell in lines[0].strip("|").split("|")[1:]]
+    rows = []
+    for line in lines[2:]:
+        cells = [cell.strip() for cell in line.strip("|").split("|")]
+        if any(cell not in ("yes", "no") for cell in cells[1:]):
+            raise ValueError(f"{doc}: {line!r}: each heavy package's cell is yes or no")
+        rows.append((re.findall(r"`([^`]+)`", cells[0]),
+                     dict(zip(heavy, (cell == "yes" for cell in cells[1:]), strict=True))))
+    return rows
+
+
+def _row_modules(names: list[str], rows: list[tuple[list[str], dict]]) -> list[str]:
+    """The importable modules of a row: its named modules, or a package's modules that no
+    other row names."""
+    named = {name for row, _ in rows for name in row if not name.endswith("/")}
+    modules = []
+    for name in names:
+        if name.endswith("/"):
+            package = name.rstrip("/")
+            modules += [m for m in _package_modules(package)
+                        if m.removeprefix("rllib_pommer.").replace(".", "/") not in named]
+        else:
+            modules.append("rllib_pommer." + name.replace("/", "."))
+    return modules
+
+
+LOAD_ROWS = load_table(DOC)
+LIMITED = [(names, may) for names, may in LOAD_ROWS if not all(may.values())]
+
+
+@pytest.mark.parametrize("names, may", LIMITED, ids=[" ".join(n) for n, _ in LIMITED])
+def test_each_package_loads_only_what_its_row_allows(names, may):
+    """Every module of the row imported in a fresh interpreter: no heavy package marked no."""
+    modules = _row_modules(names, LOAD_ROWS)
+    assert modules, names
+    assert _loaded(modules, tuple(name for name, yes in may.items() if not yes)) == ""
+
+
+def test_the_load_table_covers_every_package():
+    packages = {path.name for path in PACKAGE.iterdir() if (path / "__init__.py").is_file()}
+    rows = {name.rstrip("/") for names, _ in LOAD_ROWS for name in names if name.endswith("/")}
+    assert rows == packages
+
+
+def mapped_modules(doc: Path) -> list[str]:
+    """The modules the bullets under `MODULES_HEADING` name: `game/step`, or a job's `train`."""
+    return re.findall(r"^- `([\w/]+)`", _section(doc, MODULES_HEADING), flags=re.MULTILINE)
+
+
+def package_modules(package: Path) -> set[str]:
+    """Every module of `package` as the map names it (`__init__` files aside)."""
+    return {str(path.relative_to(package).with_suffix(""))
+            for path in package.rglob("*.py") if path.stem != "__init__"}
+
+
+def test_the_map_names_every_module_once():
+    mapped = mapped_modules(DOC)
+    assert len(mapped) == len(set(mapped)), sorted(m for m in mapped if mapped.count(m) > 1)
+    on_disk = package_modules(PACKAGE)
+    assert {"missing from the map": sorted(on_disk - set(mapped)),
+            "on the map, gone from the package": sorted(set(mapped) - on_disk)} == {
+        "missing from the map": [], "on the map, gone from the package": []}
+
+
+def test_the_map_check_fails_for_a_new_module(tmp_path):
+    copy = shutil.copytree(PACKAGE, tmp_path / "rllib_pommer",
+                           ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.so"))
+    (copy / "game" / "weather.py").write_text('"""Rain on the board."""\n')
+    assert package_modules(copy) - set(mapped_modules(DOC)) == {"game/weather"}
+
+
+# A docstring says what the code does, in the present tense: measurements, with the dates and
+# commits they were taken at, belong in docs/measurements.md.
+COMMIT_ID = re.compile(r"\b(?=[0-9a-f]*\d)(?=[0-9a-f]*[a-f])[0-9a-f]{7,40}\b")
+DATE = re.compile(r"\b20\d\d-[01]\d(-[0-3]\d)?\b")
+TIMING = re.compile(r"\b(took|measured|py-spy)\b[^.]{0,60}?\d[\d.,]*\s*(s|ms|%|x)\b")
+
+
+def diary_entries(package: Path) -> list[str]:
+    """Each docstring of `package` (module, class, function) that names a commit, a date or a
+    timing taken, as "file:name: the match"."""
+    found = []
+    for path in sorted(package.rglob("*.py")):
+        tree = ast.parse(path.read_text(), str(path))
+        nodes = [tree, *(node for node in ast.walk(tree) if isinstance(
+            node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)))]
+        for node in nodes:
+            doc = ast.get_docstring(node) or ""
+            for pattern in (COMMIT_ID, DATE, TIMING):
+                found += [f"{path.relative_to(package.parent)}:{getattr(node, 'name', '')}: "
+                          f"{match.group(0)}" for match in pattern.finditer(doc)]
+    return found
+
+
+def test_docstrings_keep_no_measurement_diary(tmp_path):
+    assert diary_entries(PACKAGE) == []
+    planted = tmp_path / "rllib_pommer"
+    planted.mkdir()
+    (planted / "fast.py").write_text(
+        '"""Fast.\n\nOn 2026-11-02 (commit 1a2b3c4d) a step took 12.5 ms."""\n')
+    assert [entry.split(": ", 1)[1] for entry in diary_entries(planted)] == [
+        "1a2b3c4d", "2026-11-02", "took 12.5 ms"]

@@ -231,9 +231,9 @@ def packed_commits(run: Path, trial: Trial) -> list[str]:
     folder whose kept checkpoint's iteration has, in that commit's history of the trial, the row
     `trial.rows` has (same env steps and episodes; rows logged after that checkpoint were run
     again on resume). A run set back to an earlier pack and trained again leaves commits of rows
-    it abandoned (the paper campaign's collapsed run, `43d4aa6`), and a policy exported before
-    the newest pack was not trained through the later ones: both are left out. A commit without
-    a history or checkpoint of the trial (an older layout) is kept."""
+    it abandoned (the paper campaign's collapsed run: docs/measurements.md), and a policy
+    exported before the newest pack was not trained through the later ones: both are left out.
+    A commit without a history or checkpoint of the trial (an older layout) is kept."""
     ours = {number(row.get("training_iteration")): row for row in trial.rows}
     commits = []
     for commit in _git(run, "log", "--format=%h", "--", ".").split():

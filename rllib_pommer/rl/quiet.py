@@ -1,6 +1,6 @@
 """Ray's start-up messages that tell a user of this project nothing, dropped from Ray's loggers.
 
-A first `train` printed them before any progress line, and none asks anything of the user:
+Ray prints them when a run starts, before any progress line, and none asks anything of the user:
 - "Token authentication is enabled for this Ray cluster": Ray 2.60 turns token authentication on
   for every new local instance; ours is one, and keeps it on (a client of a `ray start` cluster
   needs `RAY_AUTH_MODE=token`, which `init_ray`'s error says);

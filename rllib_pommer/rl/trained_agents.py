@@ -3,10 +3,9 @@
 RLlib's learner turns every agent of every sampled episode into training rows (observations,
 columns, time dimension, batching, tensors) and only then drops the rows of modules it does not
 train. Here one seat in four is the learner; the teammate and the opponents are fixed modules, so
-three quarters of that work was thrown away: on one iteration of the paper curriculum (4,000 env
-steps, 10,553 agent steps, the other core busy) the default pipeline took 2.27 s and 0.33 s with
-this piece in front, for a bit-identical learner batch (`python -m rllib_pommer.bench learn`
-measures it side by side; tests/rl/test_trained_agents.py checks the identity).
+three quarters of that work would be thrown away. With this piece in front the learner batch is
+bit-identical (tests/rl/test_trained_agents.py) and the connector several times faster
+(`python -m rllib_pommer.bench learn` measures both side by side; docs/measurements.md).
 
 The piece hands the rest of the pipeline a view of each multi-agent episode holding only the
 trained agents' single-agent episodes; the episodes themselves are left whole, since the env

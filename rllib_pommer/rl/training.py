@@ -10,9 +10,8 @@ were, also after a SIGKILL: before Tune restores, the run is packed (`packing.pa
 makes the newest whole checkpoint on disk the one Tune resumes from, whatever its state file had
 caught up with. Tune saves its state and copies it with the trial's result files to the run
 folder every 10 s (`SNAPSHOT_PERIOD_S`), also in a resumed run, whose saved state would keep the
-period it first started with (`tune_state.set_snapshot_period`): saving on every 0.1-s controller
-step took 7.5% of a core on the paper campaign (py-spy: JSON and pickle of a 390-kB state, then
-every result file copied whole).
+period it first started with (`tune_state.set_snapshot_period`); what saving on every controller
+step costs is in docs/measurements.md.
 
 A run outlives the machine it ran on: `packing.py` stops it at a checkpoint and packs its folder
 for `--resume` anywhere.

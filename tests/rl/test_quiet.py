@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-import importlib
 import logging
+import subprocess
+import sys
 
 from rllib_pommer.rl import quiet
-from rllib_pommer.rl.training import init_ray
 
 
 def test_silence_drops_each_noise_message_and_keeps_other_warnings(caplog):
@@ -22,11 +22,19 @@ def test_silence_drops_each_noise_message_and_keeps_other_warnings(caplog):
     assert messages == [f"a warning that matters, from {name}" for name in quiet.NOISE]
 
 
-def test_the_worker_hook_names_silence():
-    import inspect
-
-    source = inspect.getsource(init_ray)
-    hook = "rllib_pommer.rl.quiet.silence"
-    assert f'"worker_process_setup_hook": "{hook}"' in source
-    module, _, function = hook.rpartition(".")
-    assert getattr(importlib.import_module(module), function) is quiet.silence
+def test_every_ray_worker_of_a_run_drops_the_noise():
+    """`init_ray` hands Ray `silence` as the worker setup hook: a task in a worker of the run's
+    Ray finds the filter on each noisy logger (a fresh interpreter: Ray starts once a process)."""
+    code = ("import logging, ray\n"
+            "from rllib_pommer.rl import quiet\n"
+            "from rllib_pommer.rl.training import init_ray\n"
+            "init_ray(None, num_cpus=1)\n"
+            "@ray.remote\n"
+            "def filtered():\n"
+            "    return [any(isinstance(f, quiet._DropNoise) for f in "
+            "logging.getLogger(name).filters) for name in quiet.NOISE]\n"
+            "print(all(ray.get(filtered.remote())))\n"
+            "ray.shutdown()\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=240, check=True).stdout
+    assert out.strip().splitlines()[-1] == "True"
