@@ -160,8 +160,10 @@ def hunt_distances(board, targets, n_targets):
 
 @njit(cache=True)
 def _can_play(board, agents, bombs, meta, me, action):
-    """Whether `action` differs from Stop here: a move onto the board and not into a wall, a bomb
-    with ammo on a cell without one."""
+    """Whether `action` is tried: Stop; a bomb with ammo on a cell without one; a move onto the
+    board, not into a wall and not onto another agent (in the tree the others stand still, so
+    such a move would bounce and look like Stop, but in the game the other agent may step away
+    and the move succeed, docs/search.md §2)."""
     r, c = agents[me, A_ROW], agents[me, A_COL]
     if action == STOP:
         return True
@@ -174,7 +176,10 @@ def _can_play(board, agents, bombs, meta, me, action):
         return True
     rr, cc = r + ACTION_DR[action], c + ACTION_DC[action]
     size = board.shape[0]
-    return 0 <= rr < size and 0 <= cc < size and board[rr, cc] != RIGID and board[rr, cc] != WOOD
+    if not (0 <= rr < size and 0 <= cc < size):
+        return False
+    code = board[rr, cc]
+    return code != RIGID and code != WOOD and code < AGENT0
 
 
 @njit(cache=True)
