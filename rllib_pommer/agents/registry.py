@@ -54,6 +54,9 @@ FILTERS: dict[str, Callable[[Agent], Agent]] = {
     "jitter": JitterCorrection,
     "action": ActionFilter,
 }
+# Filter name -> its per-episode switch: the key of its probability in a curriculum stage and an
+# env config, and of its flag in the env's `filters` info (on for this episode or not).
+FILTER_SWITCHES = {"jitter": "jitter", "action": "action_filter"}
 # Name suffix -> the filters it adds; the longest suffix is tried first.
 FILTER_SUFFIXES = {
     "_jitter_action": ("jitter", "action"),
@@ -261,18 +264,40 @@ def resolve_policy(name_or_path: str | os.PathLike) -> PolicySpec:
     )
 
 
-def make_agent(name_or_path: str | os.PathLike, filters: Iterable[str] = ()) -> Agent:
-    """A fresh agent for a policy, wrapped in its name's filters and in `filters`, and in a
-    `Speaker` (outermost) if its name ends in `_words`."""
-    if isinstance(filters, str):
-        filters = (filters,)
-    unknown = sorted(set(filters) - set(FILTERS))
+def _known_filters(filters: Iterable[str]) -> set[str]:
+    """The set of filter names `filters` (one name or several), or a ValueError naming those
+    that are not in `FILTERS`."""
+    wanted = {filters} if isinstance(filters, str) else set(filters)
+    unknown = sorted(wanted - set(FILTERS))
     if unknown:
         raise ValueError(f"unknown filter(s) {unknown}; valid: {list(FILTERS)}")
-    spec = resolve_policy(name_or_path)
-    wanted = set(spec.filters) | set(filters)
-    agent = registered(spec.kind).build(spec)
+    return wanted
+
+
+def with_filters(agent: Agent, filters: Iterable[str]) -> Agent:
+    """`agent` inside the wrappers of the filters named, stacked in the order of `FILTERS`
+    whatever the order they are named in (the one place the stack is built)."""
+    wanted = _known_filters(filters)
     for filter_name, wrapper in FILTERS.items():
         if filter_name in wanted:
             agent = wrapper(agent)
+    return agent
+
+
+def switched_on(switches: Mapping[str, bool]) -> tuple[str, ...]:
+    """The filters an episode's switches turn on (`FILTER_SWITCHES`: switch name -> on), in
+    stacking order; a ValueError names a switch that no filter has."""
+    unknown = sorted(set(switches) - set(FILTER_SWITCHES.values()))
+    if unknown:
+        raise ValueError(f"unknown filter switch(es) {unknown}; valid: "
+                         f"{list(FILTER_SWITCHES.values())}")
+    return tuple(name for name, switch in FILTER_SWITCHES.items() if switches.get(switch))
+
+
+def make_agent(name_or_path: str | os.PathLike, filters: Iterable[str] = ()) -> Agent:
+    """A fresh agent for a policy, wrapped in its name's filters and in `filters`, and in a
+    `Speaker` (outermost) if its name ends in `_words`."""
+    extra = _known_filters(filters)
+    spec = resolve_policy(name_or_path)
+    agent = with_filters(registered(spec.kind).build(spec), set(spec.filters) | extra)
     return Speaker(agent) if spec.words else agent

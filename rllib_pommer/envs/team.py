@@ -25,12 +25,13 @@ and the action filter rebuild the exact arrays the compiled agents take), so any
 any seat; "planes" is the 19 planes alone, as a Box; "planes_last" the same planes channels-last
 (11, 11, 19), the layout RLlib's default CNN encoder reads.
 
-`game` picks the variant (`GAMES`): "team", the default, or "radio", TeamRadio (docs/rules.md
-§10), the same game in which every agent also sends its teammate two words 0..7 each step. There
-an action is `MultiDiscrete([6, 8, 8])`, [move, word, word] (a plain move is accepted too and
-sends (0, 0), as in the reference), and every observation is a Dict holding also "message": the
-words the teammate sent in the step that produced it, one-hot (2, 8) (`features.
-message_features`); the "planes" and "planes_last" forms become {"planes", "message"}.
+`game` picks the variant (`game.constants.TEAM_GAMES`): "team", the default, or "radio",
+TeamRadio (docs/rules.md §10), the same game in which every agent also sends its teammate two
+words 0..7 each step. There an action is `MultiDiscrete([6, 8, 8])`, [move, word, word] (a plain
+move is accepted too and sends (0, 0), as in the reference), and every observation is a Dict
+holding also "message": the words the teammate sent in the step that produced it, one-hot (2, 8)
+(`features.message_features`); the "planes" and "planes_last" forms become {"planes",
+"message"}.
 """
 
 from __future__ import annotations
@@ -46,8 +47,8 @@ from ..game.constants import (
     NUM_ACTIONS,
     NUM_AGENTS,
     RADIO_NUM_WORDS,
-    RADIO_PRESET,
     RADIO_VOCAB_SIZE,
+    TEAM_GAMES,
     TEAM_PRESET,
     has_radio,
 )
@@ -70,7 +71,6 @@ ACTION_SPACE = gym.spaces.Discrete(NUM_ACTIONS)
 # TeamRadio: [move, word, word], and the teammate's words heard, one-hot.
 RADIO_ACTION_SPACE = gym.spaces.MultiDiscrete([NUM_ACTIONS] + [RADIO_VOCAB_SIZE] * RADIO_NUM_WORDS)
 MESSAGE_SPACE = gym.spaces.Box(0.0, 1.0, (RADIO_NUM_WORDS, RADIO_VOCAB_SIZE), np.float32)
-GAMES = {"team": TEAM_PRESET, "radio": RADIO_PRESET}  # the env's variants, by config `game`
 
 
 def _dict_rows(obs: Observation) -> list[dict[str, np.ndarray]]:
@@ -98,9 +98,9 @@ def radio_space(space: gym.Space) -> gym.spaces.Dict:
 
 
 def check_game(game) -> str:
-    """`game` if it names one of `GAMES`, else a ValueError naming it."""
-    if game not in GAMES:
-        raise ValueError(f"env config: game {game!r} is not one of {list(GAMES)}")
+    """`game` if it names one of `TEAM_GAMES`, else a ValueError naming it."""
+    if game not in TEAM_GAMES:
+        raise ValueError(f"env config: game {game!r} is not one of {list(TEAM_GAMES)}")
     return game
 
 
@@ -165,7 +165,7 @@ class MultiAgentTeam:
         super().__init__()  # rl/env.PommeEnv puts RLlib's MultiAgentEnv next in line
         config = dict(config or {})
         max_steps = check_max_steps(config.get("max_steps", TEAM_PRESET.max_steps))
-        self.game = Game(replace(GAMES[check_game(config.get("game", "team"))],
+        self.game = Game(replace(TEAM_GAMES[check_game(config.get("game", "team"))],
                                  max_steps=max_steps))
         self.radio = has_radio(self.game.config.game_type)
         self.observation_form = config.get("observation", "dict")

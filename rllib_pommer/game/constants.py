@@ -134,6 +134,11 @@ def has_teams(game_type: int) -> bool:
     return game_type == GameType.TEAM or game_type == GameType.TEAM_RADIO
 
 
+# The presets played in two teams, by the name an env config's or a curriculum's `game` gives:
+# the variants of the team env ("team", "radio").
+TEAM_GAMES = {name: p for name, p in PRESETS.items() if has_teams(p.game_type)}
+
+
 def has_radio(game_type: int) -> bool:
     """Whether agents send words (TeamRadio)."""
     return game_type == GameType.TEAM_RADIO

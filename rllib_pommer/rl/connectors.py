@@ -9,12 +9,12 @@ trains on what was executed with a consistent probability ratio.
 
 Which filters are on is decided per episode by the env's seeded stream (the `filters` info) and
 read once per learner agent (two where the learner is its own teammate) into
-`episode.custom_data`, together with the wrappers that apply them: the agents'
-own `JitterCorrection` and `ActionFilter` (stacked jitter inside, filter outside, as in the
-registry) around a stand-in that returns the module's action. Their memory (positions, the
-expert SimpleAgent's memory, random streams) therefore lives with the episode, seeded from the
-episode's first observation. Counts of learner steps and overridden actions go to custom_data for
-the episode-end metrics.
+`episode.custom_data`, together with the wrappers that apply them: the registry turns the
+switches into its filter names and stacks its wrappers (`registry.switched_on`,
+`registry.with_filters`) around a stand-in that returns the module's action. Their memory
+(positions, the expert SimpleAgent's memory, random streams) therefore lives with the episode,
+seeded from the episode's first observation. Counts of learner steps and overridden actions go
+to custom_data for the episode-end metrics.
 
 A fixed module named with the registry's filter suffixes (`_jitter`, `_action`, `_jitter_action`)
 has its filters on in every episode; they are kept apart (FIXED_FILTERS_KEY), so the learner's
@@ -32,9 +32,7 @@ import torch
 from ray.rllib.connectors.connector_v2 import ConnectorV2
 from ray.rllib.core.columns import Columns
 
-from ..agents.action_filter import ActionFilter
-from ..agents.jitter import JitterCorrection
-from ..agents.registry import resolve_policy
+from ..agents.registry import FILTER_SWITCHES, resolve_policy, switched_on, with_filters
 from ..game.constants import TEAM_PRESET
 from ..game.raw_codec import unpack_raw
 from .names import LEARNER
@@ -43,18 +41,15 @@ FILTERS_KEY = "learner_filters"
 FIXED_FILTERS_KEY = "fixed_filters"
 
 
-# The registry's filter names -> the episode flags EpisodeFilters reads (the env's `filters` info).
-FLAG_OF_FILTER = {"jitter": "jitter", "action": "action_filter"}
-
-
 def fixed_filter_flags(module_id: str) -> dict[str, bool]:
-    """The filters always on for a fixed module: those its policy name's suffix asks for (none
-    for a module id that is no policy name, as self-play snapshots)."""
+    """The switches always on for a fixed module (as the env's `filters` info names them): those
+    of the filters its policy name's suffix asks for (none for a module id that is no policy
+    name, as self-play snapshots)."""
     try:
         filters = resolve_policy(module_id).filters
     except ValueError:
         return {}
-    return {FLAG_OF_FILTER[name]: True for name in filters}
+    return {FILTER_SWITCHES[name]: True for name in filters}
 
 
 class ModuleAction:
@@ -70,16 +65,13 @@ class ModuleAction:
 
 
 class EpisodeFilters:
-    """One episode's wrapper stack for the learner, and its counts."""
+    """One episode's wrapper stack for the learner, and its counts: `flags` are the episode's
+    filter switches (the env's `filters` info)."""
 
     def __init__(self, flags: dict, seat: int, first_raw: np.ndarray):
         self.flags = flags
         self.core = ModuleAction()
-        agent = self.core
-        if flags.get("jitter"):
-            agent = JitterCorrection(agent)
-        if flags.get("action_filter"):
-            agent = ActionFilter(agent)
+        agent = with_filters(self.core, switched_on(flags))
         agent.reset(seat, int(TEAM_PRESET.game_type),
                     np.random.default_rng(np.frombuffer(first_raw.tobytes(), np.uint8)))
         self.agent = agent

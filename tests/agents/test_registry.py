@@ -62,6 +62,22 @@ def test_filters_argument_stacks_jitter_inside_action_once():
     assert layers(make_agent("smart_random", filters="action")) == ["ActionFilter", "SmartRandom"]
 
 
+def test_episode_switches_build_the_same_stack_as_the_names():
+    """The env's per-episode switches (as a curriculum stage names them) turn on the registry's
+    filters, stacked as make_agent stacks them."""
+    assert registry.switched_on({"action_filter": True, "jitter": True}) == ("jitter", "action")
+    assert registry.switched_on({"action_filter": True, "jitter": False}) == ("action",)
+    assert registry.switched_on({"jitter": True}) == ("jitter",)
+    assert registry.switched_on({}) == ()
+    stack = registry.with_filters(StaticAgent(), registry.switched_on(
+        {"action_filter": True, "jitter": True}))
+    assert layers(stack) == ["ActionFilter", "JitterCorrection", "StaticAgent"]
+    with pytest.raises(ValueError, match=r"unknown filter switch\(es\) \['action'\]"):
+        registry.switched_on({"action": True})
+    with pytest.raises(ValueError, match=r"unknown filter\(s\) \['action_filter'\]"):
+        registry.with_filters(StaticAgent(), ["action_filter"])
+
+
 def test_each_call_builds_fresh_agents():
     first, second = make_agent("simple_jitter_action"), make_agent("simple_jitter_action")
     assert first is not second and first.inner is not second.inner

@@ -12,8 +12,9 @@ from gymnasium.utils.env_checker import check_env
 from pettingzoo.test import parallel_api_test, parallel_seed_test, render_test
 from pettingzoo.utils.conversions import parallel_to_aec
 
+from rllib_pommer.agents.registry import FILTER_SWITCHES, FILTERS, switched_on
 from rllib_pommer.envs import ENV_ID, PommeParallelEnv, PommeTeamEnv, parallel_env
-from rllib_pommer.envs.team import PLANES_SPACE
+from rllib_pommer.envs.team import PLANES_SPACE, MultiAgentTeam
 from rllib_pommer.game.state import A_COL, A_ROW
 from rllib_pommer.imitation.features import featurize
 
@@ -97,6 +98,18 @@ def test_gymnasium_render_draws_the_board():
     after = env.render()
     assert before.dtype == np.uint8 and before.ndim == 3 and before.shape[2] == 3
     assert before.shape == after.shape and not np.array_equal(before, after)
+
+
+def test_the_episode_filter_switches_are_the_registry_s():
+    """The env draws the switches a curriculum stage sets (`action_filter`, `jitter`) and the
+    registry turns them into its filters, as the learner's connector does."""
+    env = MultiAgentTeam({"action_filter": 1.0, "jitter": 1.0})
+    _, infos = env.reset(seed=3)
+    assert set(infos[0]["filters"]) == set(FILTER_SWITCHES.values())
+    assert switched_on(infos[0]["filters"]) == tuple(FILTERS)
+    env.set_stage("shaped", 0.0, 1.0)
+    _, infos = env.reset(seed=3)
+    assert switched_on(infos[0]["filters"]) == ("jitter",)
 
 
 @pytest.mark.parametrize(("make", "message"), [
