@@ -58,7 +58,7 @@ from ..agents.registry import (
     policy_names,
     resolve_policy,
 )
-from ..game.constants import PRESETS, TEAM_PRESET, has_teams
+from ..game.constants import TEAM_GAMES, TEAM_PRESET
 from ..game.rewards import REWARD_MODES
 from ..util.shipped import data_dir
 from ..util.toml_values import fits
@@ -72,8 +72,6 @@ else:  # pragma: no cover
 
 TOP_KEYS = ("name", "description", "game", "pi_weights", "vf_weights", "max_steps", "ppo",
             "league", "defaults", "stage")
-# `game`: the presets played in two teams, the env's variants (envs/team.GAMES).
-GAMES = tuple(name for name, game in PRESETS.items() if has_teams(game.game_type))
 
 
 @dataclass(frozen=True)
@@ -127,7 +125,7 @@ class Curriculum:
 
     @property
     def game(self) -> str:
-        """The file's `game` (`GAMES`: "team", the default, or "radio", TeamRadio, where the
+        """The file's `game` (`TEAM_GAMES`: "team", the default, or "radio", TeamRadio, where the
         learner also speaks), read again from it as `description` is."""
         with self.path.open("rb") as f:
             return tomllib.load(f).get("game", "team")
@@ -310,8 +308,8 @@ def load_curriculum(name_or_path: str | Path) -> Curriculum:
                       ("vf_weights", str)):
         if key in data:
             _check_type(where, key, data[key], kind)
-    if data.get("game", "team") not in GAMES:
-        raise ValueError(f"{where}: game {data['game']!r} is not one of {list(GAMES)}")
+    if data.get("game", "team") not in TEAM_GAMES:
+        raise ValueError(f"{where}: game {data['game']!r} is not one of {list(TEAM_GAMES)}")
     if "max_steps" in data:
         _check_type(where, "max_steps", data["max_steps"], int, positive=True)
     ppo = data.get("ppo", {})
