@@ -36,6 +36,8 @@ import time
 from functools import partial
 from pathlib import Path
 
+from .util.errors import report_error
+
 RUNS = 3
 REPO_ROOT = Path(__file__).resolve().parents[1]
 REFERENCE_SPEED = REPO_ROOT / "tests" / "reference" / "reference_speed.json"
@@ -170,8 +172,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     args = parser.parse_args(argv)
     if not REFERENCE_SPEED.exists():
-        print(f"error: reference figures not found at {REFERENCE_SPEED}", file=sys.stderr)
-        return 2
+        return report_error(f"reference figures not found at {REFERENCE_SPEED}")
     title, measure = TARGETS[args.target]
     result = measure()
     if args.json:

@@ -23,6 +23,7 @@ from tqdm import tqdm
 
 from .data.collector import SHARD_GAMES, Collection, Dagger, ShardResult
 from .util.cli_options import positive_int
+from .util.errors import report_error
 from .util.outputs import check_output_dir
 
 
@@ -55,8 +56,7 @@ def main(argv: list[str] | None = None) -> int:
         collection = Collection(args.out, args.games, args.seed, args.shard_games,
                                 args.label_draws, dagger)
     except ValueError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+        return report_error(exc)
     resumed = sum(r.games for r in collection.results.values())
     resumed_samples = samples = sum(r.samples for r in collection.results.values())
     start = time.perf_counter()

@@ -39,6 +39,7 @@ from .arena.match import MatchSpec, play_match, record_games
 from .arena.records import RECORDS_SUFFIXES, summarise, write_records
 from .game.records import JSONL_SUFFIXES, write_games
 from .util.cli_options import non_negative_int, positive_int
+from .util.errors import report_error
 from .util.outputs import check_distinct, check_output
 
 DEFAULT_REPLAYS = Path("arena_replays.jsonl.gz")
@@ -120,8 +121,7 @@ def main(argv: list[str] | None = None) -> int:
             records = play_match(spec, args.workers, bar.update)
         elapsed = time.perf_counter() - start
     except ValueError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+        return report_error(exc)
     summary = summarise(records)
     summary["seconds"] = elapsed
     print(format_summary(spec, summary))  # first: the match's result survives a failed write
@@ -135,9 +135,7 @@ def main(argv: list[str] | None = None) -> int:
                                 record_games(spec, args.record, args.with_observations))
             print(f"  wrote {count} replays to {replays}")
     except OSError as exc:
-        print(f"error: the match was played, but writing its output failed: {exc}",
-              file=sys.stderr)
-        failed = 2
+        failed = report_error(f"the match was played, but writing its output failed: {exc}")
     if args.json:
         print(json.dumps({"team": spec.team, "vs": spec.vs, "filters": list(spec.filters),
                           "seed": spec.seed, "variant": spec.variant, **summary}))

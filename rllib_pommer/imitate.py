@@ -21,6 +21,7 @@ from .imitation.bc import (
     write_policy_file,
 )
 from .util.cli_options import add_options, settings_from
+from .util.errors import report_error
 from .util.outputs import check_output_dir
 
 _HELP = {
@@ -47,8 +48,7 @@ def main(argv: list[str] | None = None) -> int:
             check_not_replacing(cfg)
         metrics = train(cfg)
     except ValueError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+        return report_error(exc)
     names = ", ".join(d.name for d in cfg.data)
     policy = write_policy_file(args.out, f"Behaviour cloning of SimpleAgent ({names})")
     print(f"validation accuracy {metrics['validation_accuracy']:.4f}, "

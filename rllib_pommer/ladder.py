@@ -36,6 +36,7 @@ from .arena.ladder import (
 )
 from .arena.match import play_match
 from .util.cli_options import non_negative_int, positive_int
+from .util.errors import report_error
 from .util.outputs import check_output_dir
 from .viz.ladder import draw_ladders
 
@@ -100,8 +101,7 @@ def main(argv: list[str] | None = None) -> int:
         parts = list(draw_ladders(args.out, args.out))
         (args.out / "ladder.md").write_text("# Ladder\n\n" + "\n\n".join(parts) + "\n")
     except (ValueError, OSError) as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+        return report_error(exc)
     except KeyboardInterrupt:
         print(f"interrupted: the pairs finished are kept in {args.out}; run the same command "
               f"to resume", file=sys.stderr)

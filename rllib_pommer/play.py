@@ -33,6 +33,7 @@ from .game.records import JSONL_SUFFIXES
 from .playing.server import RECONNECT, make_app, parse_turn_time, serve_game
 from .playing.session import HumanGame, PlaySpec
 from .util.cli_options import non_negative_int
+from .util.errors import report_error
 from .util.outputs import check_output
 
 DEFAULT_TURN_TIME = 0.5
@@ -82,8 +83,7 @@ def main(argv: list[str] | None = None) -> int:
         game = HumanGame(PlaySpec(args.team, args.vs, args.seat, args.teammate, args.seed,
                                   args.variant))
     except ValueError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+        return report_error(exc)
 
     def announce(port: int) -> None:
         print(f"play at http://{args.host}:{port}/", flush=True)
@@ -92,11 +92,10 @@ def main(argv: list[str] | None = None) -> int:
         table = asyncio.run(serve_game(make_app(game, out, args.turn_time, args.reconnect),
                                        args.host, args.port, announce))
     except OSError as exc:
-        print(f"error: cannot serve on {args.host}:{args.port} ({exc})", file=sys.stderr)
-        return 2
+        return report_error(f"cannot serve on {args.host}:{args.port} ({exc})")
     print(game.summary())
     for error in table.errors:
-        print(f"error: {error}", file=sys.stderr)
+        report_error(error)
     if not table.saved:
         return 1
     print(f"replay saved to {table.saved}: python -m rllib_pommer.replay html {table.saved} "

@@ -24,6 +24,7 @@ from pathlib import Path
 from .agents.agreement import format_line, measure_agreement
 from .game.records import read_games
 from .game.verify import verify_games
+from .util.errors import report_error
 from .util.outputs import check_output
 from .viz.frames import load_game
 from .viz.render import render_game
@@ -113,8 +114,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return args.run(args)
     except (ValueError, OSError) as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+        return report_error(exc)
 
 
 if __name__ == "__main__":

@@ -26,6 +26,7 @@ import sys
 from pathlib import Path
 
 from .rl.history import exported_training, run_training
+from .util.errors import report_error
 from .viz.model_card import write_model_card
 from .viz.report import SUMMARIES, classify, write_report
 
@@ -60,8 +61,7 @@ def main(argv: list[str] | None = None) -> int:
                         if found["runs"] else None)
             report = write_report(args.out, found, training)
     except (ValueError, OSError) as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+        return report_error(exc)
     print(f"wrote {report}")
     return 0
 

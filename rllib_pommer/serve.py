@@ -27,6 +27,7 @@ import torch
 
 from .serving.app import DEFAULT_PORT, make_app, serve_until_stopped
 from .serving.policy_host import PolicyHost
+from .util.errors import report_error
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -42,13 +43,11 @@ def main(argv: list[str] | None = None) -> int:
     # other busy processes they spin against them (docs/measurements.md).
     torch.set_num_threads(1)
     if not 0 <= args.port < 65536:
-        print(f"error: --port must be in 0..65535, got {args.port}", file=sys.stderr)
-        return 2
+        return report_error(f"--port must be in 0..65535, got {args.port}")
     try:
         host = PolicyHost(args.policy, [f for f in args.filters.split(",") if f], args.seed)
     except ValueError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+        return report_error(exc)
     started = time.perf_counter()
     host.warm_up()  # before /ping answers: a pinging runner may start the game at once
     print(f"{args.policy} warmed up in {time.perf_counter() - started:.1f} s", file=sys.stderr)
@@ -59,8 +58,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         asyncio.run(serve_until_stopped(make_app(host), args.host, args.port, announce))
     except OSError as exc:
-        print(f"error: cannot serve on {args.host}:{args.port} ({exc})", file=sys.stderr)
-        return 2
+        return report_error(f"cannot serve on {args.host}:{args.port} ({exc})")
     _exit_at_once()
 
 

@@ -32,6 +32,7 @@ from pathlib import Path
 
 from .rl.settings import RunSettings
 from .util.cli_options import add_options, settings_from
+from .util.errors import report_error
 from .util.outputs import check_output_dir
 
 HELP = {
@@ -83,13 +84,11 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(str(exc))
     except RayStartError as exc:  # not the user's input: one line and exit 1, no traceback
         ray.shutdown()
-        print(f"error: {exc}", file=sys.stderr)
-        return 1
+        return report_error(exc, 1)
     try:
         result = train(curriculum, out, settings)
     except ValueError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+        return report_error(exc)
     finally:
         ray.shutdown()
     checkpoint = result.checkpoint.path if result.checkpoint else "-"
@@ -110,8 +109,7 @@ def _stop(parser: argparse.ArgumentParser, out: Path | None) -> int:
     try:
         stop_run(out)
     except ValueError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+        return report_error(exc)
     return 0
 
 
@@ -123,8 +121,7 @@ def _pack(parser: argparse.ArgumentParser, out: Path | None) -> int:
     try:
         kept = pack_run(out)
     except ValueError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+        return report_error(exc)
     size = sum(p.stat().st_size for p in out.rglob("*") if p.is_file())
     for trial, (checkpoint, registered) in kept.items():
         print(f"{out / trial}: kept {checkpoint}, results folded into history.csv")
@@ -152,11 +149,9 @@ def _export(parser: argparse.ArgumentParser, out: Path | None, target: Path) -> 
         weights, policy_file = export_policy(out, target)
         card = write_model_card(target, *exported_training(target))
     except ValueError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+        return report_error(exc)
     except OSError as exc:  # a folder that passed the check yet takes no file (/proc, a full disk)
-        print(f"error: --export {target}: cannot write the policy ({exc})", file=sys.stderr)
-        return 2
+        return report_error(f"--export {target}: cannot write the policy ({exc})")
     print(f"wrote {weights}, {policy_file} and {card}; play it with --team {policy_file}")
     return 0
 
