@@ -42,7 +42,7 @@ from .history import (
     POLICY_HISTORY_DIR,
     POLICY_SOURCE_FILE,
     Trial,
-    exported_training,
+    lineage,
     number,
     read_trial,
     write_summary,
@@ -285,24 +285,6 @@ def starting_policy(run: Path, curriculum: Curriculum, exclude: str = "") -> str
         if all(key in start and torch.equal(start[key], value) for key, value in weights.items()):
             return name
     return None
-
-
-def lineage(policy: str | None) -> list[dict]:
-    """The shipped policies pi descends from, oldest first, each with the games its own run
-    trained it (`exported_training`); the chain ends at a policy no PPO run exported (the
-    imitation clone), which counts 0. What the paper's game budget is counted against."""
-    chain, seen = [], set()
-    while policy and policy not in seen:
-        seen.add(policy)
-        folder = resolve_policy(policy).file("weights").parent
-        try:
-            source, training = exported_training(folder)
-        except ValueError:
-            chain.append({"policy": policy, "games": 0})
-            break
-        chain.append({"policy": policy, "games": sum(s.episodes for s in training.stages)})
-        policy = source.get("pi_start")
-    return chain[::-1]
 
 
 def _source(policy: str, checkpoint: Path, trial: Trial, iteration: int,

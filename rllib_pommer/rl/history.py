@@ -31,10 +31,17 @@ over the iteration's own episodes. The curve weights each row by the episodes it
 finished and averages the last `WINDOW` episodes' worth, restarted at each phase change so a
 phase's curve never mixes opponents: a mean of 100-episode means spanning about 1,100 episodes.
 
+A run continued from a shipped policy starts where that policy's training ended: its `Origin`
+(`run_origin`) is the policy its curriculum's `pi_weights` names and the games of that policy's
+lineage, counted from the imitation clone (`lineage`). A curve keeps the run's own episode
+counts and carries the origin beside them (`TrainingCurve.start`), which Fig. 3 adds; a run from
+the clone, or from weights no shipped policy holds, starts at 0.
+
 `write_summary` keeps a trial's curve columns and `SUMMARY_COLUMNS` in a small progress.csv (a
 few hundred bytes per iteration instead of a result.json's ~25 KB), itself a trial directory this
-module reads: the report writes one per run beside Fig. 3, so the figure and the figures quoted
-from a run can be redrawn after the run directory is gone.
+module reads: the report writes one per run beside Fig. 3, with the run's origin in
+`ORIGIN_FILE`, so the figure and the figures quoted from a run can be redrawn after the run
+directory is gone.
 """
 
 from __future__ import annotations
@@ -50,6 +57,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..agents.registry import policy_names, resolve_policy
 from ..viz.training import (
     MEMBER_WINDOW,
     OUTCOME_KEYS,
@@ -61,6 +69,7 @@ from ..viz.training import (
     TrainingCurve,
     phases,
 )
+from .curriculum import run_curriculum
 
 RETURN_COLUMNS = ("env_runners/module_episode_returns_mean/learner",
                   "env_runners/episode_return_mean", "episode_reward_mean")
@@ -77,6 +86,7 @@ POLICY_HISTORY_DIR = "history"
 SOURCE_KEYS = ("policy", "run", "checkpoint", "iteration", "curriculum", "exported_at_commit",
                "run_commits")
 TRIAL_FILES = ("result.json", "progress.csv", HISTORY_FILE)
+ORIGIN_FILE = "origin.json"  # in a trial folder: its run's `Origin`, read before the curriculum
 # Kept by `write_summary` beside the columns the curve is drawn from (what our trainer logs).
 SUMMARY_COLUMNS = (
     "training_iteration", "time_total_s", "env_runners/num_env_steps_sampled_lifetime",
@@ -283,8 +293,12 @@ def _episode_counts(trial: Trial) -> np.ndarray:
     return np.nan_to_num(_values(rows, per_iter_col))
 
 
-def training_curve(trial: Trial | Path, window: int = WINDOW) -> TrainingCurve:
+def training_curve(trial: Trial | Path, window: int = WINDOW,
+                   origin: Origin | None = None) -> TrainingCurve:
+    """The trial's curves over its own lifetime episodes, with the games before its first
+    (`origin`; default: `run_origin` of the trial's folder)."""
     trial = read_trial(trial)
+    origin = run_origin(trial.path) if origin is None else origin
     rows = trial.rows
     returns_col = _column(rows, RETURN_COLUMNS)
     if returns_col is None:
@@ -305,7 +319,8 @@ def training_curve(trial: Trial | Path, window: int = WINDOW) -> TrainingCurve:
                          curve(_values(kept, "env_runners/learner_win")),
                          curve(_values(kept, "env_runners/learner_loss")),
                          curve(_values(kept, "env_runners/learner_kills")),
-                         curve(_values(kept, "env_runners/learner_bombs")))
+                         curve(_values(kept, "env_runners/learner_bombs")),
+                         start=origin.games, origin=origin.policy)
 
 
 MEMBER_PREFIX = "env_runners/learner_win_vs_"
@@ -396,14 +411,85 @@ def run_training(paths: list[Path], summaries: Path | None = None) -> Training:
             raise ValueError(f"{path}: no Tune trial (progress.csv or result.json) in or below it")
         trials += found
     read = [read_trial(trial) for trial in trials]
+    origins = [run_origin(trial) for trial in trials]
     named = Counter(trial.name for trial in read)
-    for k, trial in enumerate(read if summaries else ()):
-        write_summary(trial, summaries / (trial.name if named[trial.name] == 1
-                                          else f"{trial.name}_{k}"))
+    for k, (trial, origin) in enumerate(zip(read, origins, strict=True) if summaries else ()):
+        summary = write_summary(trial, summaries / (trial.name if named[trial.name] == 1
+                                                    else f"{trial.name}_{k}"))
+        write_origin(origin, summary)
     leagues = [league_curves(trial) for trial in read]
-    return Training(trials, [training_curve(trial) for trial in read],
+    return Training(trials, [training_curve(trial, origin=origin)
+                             for trial, origin in zip(read, origins, strict=True)],
                     [f for trial in read for f in stage_figures(trial)],
                     [league for league in leagues if league is not None])
+
+
+@dataclass(frozen=True)
+class Origin:
+    """Where a run's pi started: the shipped policy whose weights it started from (None: not
+    known, or weights no shipped policy holds) and the games its lineage had trained, counted
+    from the imitation clone (0 for the clone itself)."""
+
+    policy: str | None = None
+    games: int = 0
+
+
+def run_origin(trial: Path) -> Origin:
+    """The origin of the run a trial folder belongs to: the trial's `ORIGIN_FILE` (a summary's),
+    else the shipped policy whose weights the run's curriculum names as `pi_weights`
+    (`curriculum.run_curriculum` of the trial's parent folder), with the games of its `lineage`.
+    A run whose curriculum cannot be read starts at 0, with a warning."""
+    noted = Path(trial) / ORIGIN_FILE
+    if noted.is_file():
+        try:
+            data = json.loads(noted.read_text())
+            return Origin(data.get("policy"), int(data.get("games", 0)))
+        except (ValueError, TypeError, AttributeError) as exc:
+            raise ValueError(f"{noted}: unreadable ({exc})") from None
+    try:
+        curriculum = run_curriculum(Path(trial).parent)
+    except (ValueError, OSError) as exc:
+        warnings.warn(f"{trial}: drawn from 0 games, its curriculum is not readable ({exc})",
+                      stacklevel=2)
+        return Origin()
+    policy = shipped_policy(curriculum.pi_weights) if curriculum else None
+    return Origin(policy, sum(link["games"] for link in lineage(policy))) if policy else Origin()
+
+
+def write_origin(origin: Origin, folder: Path) -> None:
+    """Note `origin` in a trial folder (a summary), where `run_origin` reads it first."""
+    (Path(folder) / ORIGIN_FILE).write_text(json.dumps(
+        {"policy": origin.policy, "games": origin.games}) + "\n")
+
+
+def shipped_policy(weights: Path) -> str | None:
+    """The shipped learned policy whose weights file `weights` is (the one named like the
+    weights' folder first: `ppo_league_v1` plays `ppo_league`'s), None for any other file."""
+    weights = Path(weights).resolve()
+    for name in sorted(policy_names(), key=lambda name: name != weights.parent.name):
+        spec = resolve_policy(name)
+        if spec.kind == "learned" and spec.file("weights").resolve() == weights:
+            return name
+    return None
+
+
+def lineage(policy: str | None) -> list[dict]:
+    """The shipped policies pi descends from, oldest first, each with the games its own run
+    trained it (`exported_training`); the chain ends at a policy no PPO run exported (the
+    imitation clone), which counts 0, or at one whose export proved no start (`pi_start`). What
+    the paper's game budget is counted against."""
+    chain, seen = [], set()
+    while policy and policy not in seen:
+        seen.add(policy)
+        folder = resolve_policy(policy).file("weights").parent
+        try:
+            source, training = exported_training(folder)
+        except ValueError:
+            chain.append({"policy": policy, "games": 0})
+            break
+        chain.append({"policy": policy, "games": sum(s.episodes for s in training.stages)})
+        policy = source.get("pi_start")
+    return chain[::-1]
 
 
 def read_source(policy_dir: Path) -> dict:

@@ -7,6 +7,7 @@ so figures can be made from any process or thread without a display.
 from __future__ import annotations
 
 import math
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -36,35 +37,57 @@ REWARD_AXES = {"shaped": "shaped reward (the paper's)", "raw": "raw reward (the 
 
 def plot_training(curves: list[TrainingCurve], out: Path) -> Figure:
     """Fig. 3: each run's learner return, one axis per reward kind, one segment per curriculum
-    phase with the phase names at their starts (what the mean is over: viz/training.py)."""
+    phase with the phase names at their starts (what the mean is over: viz/training.py), over
+    the games counted from the imitation clone: a run continued from a shipped policy starts
+    where that policy's training ended (`TrainingCurve.start`)."""
     kinds = [kind for kind in REWARD_AXES if any(kind in curve.rewards for curve in curves)]
     unknown = sorted({kind for curve in curves for kind in curve.rewards} - set(REWARD_AXES))
     if unknown:
         raise ValueError(f"Fig. 3: unknown reward kind(s) {unknown}; known: {list(REWARD_AXES)}")
     kinds = kinds or [""]
-    fig = Figure(figsize=(11, 1.2 + 3.6 * len(kinds)), layout="constrained")
+    fig = Figure(figsize=(12, 1.6 + 3.6 * len(kinds)), layout="constrained")
     axes = dict(zip(kinds, fig.subplots(len(kinds), 1, sharex=True, squeeze=False)[:, 0],
                     strict=True))
+    marks: dict = {ax: [] for ax in axes.values()}
     for k, curve in enumerate(curves):
         colour = f"C{k % 10}"
         labelled = set()
+        games = curve.start + curve.episodes
         for start, end, (stage, kind) in phases(list(zip(curve.stages, curve.rewards,
                                                          strict=True))):
             ax = axes[kind]
-            ax.plot(curve.episodes[start:end], curve.returns[start:end], color=colour,
+            ax.plot(games[start:end], curve.returns[start:end], color=colour,
                     label=None if kind in labelled else curve.name)
             labelled.add(kind)
-            _mark_phase(ax, curve.episodes[start], stage, colour, k)
+            marks[ax].append((games[start], stage, colour))
     for kind, ax in axes.items():
         ax.set_title(REWARD_AXES[kind], fontsize=10)
         ax.set_ylabel(f"learner's return: {WINDOW:,}-episode\nmean of RLlib's "
                       f"{RLLIB_WINDOW}-episode means")
         ax.grid(alpha=0.3)
         _legend_beside(ax)
-    axes[kinds[-1]].set_xlabel("training episodes (lifetime)")
+    axes[kinds[-1]].set_xlabel(_games_label(curves))
     fig.suptitle("Fig. 3: training reward per curriculum phase")
+    _mark_phases(fig, marks)
     fig.savefig(out, dpi=DPI)
     return fig
+
+
+def _games_label(curves: list[TrainingCurve]) -> str:
+    """The x axis: games counted from the imitation clone, and where each continued run
+    starts (the shipped policy it continued and that policy's games)."""
+    starts: dict[tuple[str | None, int], list[str]] = {}
+    for curve in curves:
+        if curve.start:
+            starts.setdefault((curve.origin, curve.start), []).append(curve.name)
+    label = "training games, counted from the imitation clone"
+    if not starts:
+        return label
+    continued = "; ".join(f"{', '.join(names)} from `{origin}` at {games:,}"
+                          for (origin, games), names in sorted(starts.items(),
+                                                               key=lambda item: item[0][1]))
+    return "\n".join(textwrap.wrap(f"{label} (runs continued from a shipped policy start at its "
+                                   f"games: {continued})", 150))
 
 
 def plot_league(league: LeagueCurves, out: Path) -> Figure:
@@ -109,13 +132,53 @@ def _legend_beside(ax) -> None:
     ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
 
 
-def _mark_phase(ax, episode: float, stage: str, colour: str, run: int) -> None:
-    """A dotted line where a curriculum phase starts, named near the top: each run's names a
-    little lower than the one before, so two runs' phases that start together stay legible."""
-    if stage:
-        ax.axvline(episode, color=colour, linestyle=":", linewidth=1)
-        ax.annotate(stage, (episode, 0.98 - 0.2 * (run % 4)), rotation=90, ha="right",
-                    va="top", fontsize=8, color=colour, xycoords=("data", "axes fraction"))
+PHASE_FONT = 7  # points
+
+
+def _mark_phases(fig: Figure, marks: dict) -> None:
+    """Where each curriculum phase starts: a dotted line in its run's colour, its name near the
+    top. A name that several runs start at one place is written once, in grey; the others take
+    the highest lane (a row of names on their sides, one name long) where no name stands within
+    a name's width, or, with every lane taken there, the lane whose last name is furthest left,
+    just right of it: no two names overlap (`marks`: per axis, the (games, phase, colour) of
+    each phase start)."""
+    fig.draw_without_rendering()  # the lanes need each axis' size as laid out
+    for ax, found in marks.items():
+        per_pixel = _data_per_pixel(ax)
+        named: dict[tuple[float, str], str] = {}
+        for games, stage, colour in sorted(found, key=lambda mark: (mark[1], mark[0])):
+            if not stage:
+                continue
+            ax.axvline(games, color=colour, linestyle=":", linewidth=1)
+            near = next((key for key in named
+                         if key[1] == stage and abs(key[0] - games) < PHASE_FONT * per_pixel),
+                        None)
+            if near is None:
+                named[games, stage] = colour
+            elif named[near] != colour:
+                named[near] = "0.35"
+        texts = {key: ax.annotate(key[1], (key[0], 0.98), rotation=90, ha="right", va="top",
+                                  fontsize=PHASE_FONT, color=colour,
+                                  xycoords=("data", "axes fraction"))
+                 for key, colour in sorted(named.items())}
+        if not texts:
+            continue
+        sizes = [text.get_window_extent() for text in texts.values()]  # in pixels, as drawn
+        width = max(size.width for size in sizes) + 1
+        height = (max(size.height for size in sizes) + 4) / ax.get_window_extent().height
+        last = [-math.inf] * max(1, int(0.98 // height))
+        for (games, _), text in texts.items():
+            x = games / per_pixel
+            free = [lane for lane in range(len(last)) if x - last[lane] >= width]
+            lane = free[0] if free else int(np.argmin(last))
+            last[lane] = x = max(x, last[lane] + width)  # no lane free: just right of the last
+            text.xy = text.xyann = (x * per_pixel, 0.98 - lane * height)
+            text.set_in_layout(False)
+
+
+def _data_per_pixel(ax) -> float:
+    low, high = ax.get_xlim()
+    return (high - low) / max(ax.get_window_extent().width, 1.0)
 
 
 # The panels below the outcomes: (TrainingCurve field, axis label, axis top).
@@ -130,33 +193,37 @@ def plot_outcomes(curves: list[TrainingCurve], out: Path) -> Figure:
     bombs each learner agent laid per game: a run that learns to hide lays none."""
     below = [(field, label, top) for field, label, top in OUTCOME_PANELS
              if any(np.isfinite(getattr(curve, field)).any() for curve in curves)]
-    fig = Figure(figsize=(11, 4.2 + 3.0 * len(below)), layout="constrained")
+    fig = Figure(figsize=(12, 4.6 + 3.0 * len(below)), layout="constrained")
     ax, *panels = fig.subplots(1 + len(below), 1, sharex=True, squeeze=False)[:, 0]
     for panel, (field, label, top) in zip(panels, below, strict=True):
         for k, curve in enumerate(curves):
             if np.isfinite(getattr(curve, field)).any():
-                panel.plot(curve.episodes, getattr(curve, field), color=f"C{k % 10}",
+                panel.plot(curve.start + curve.episodes, getattr(curve, field),
+                           color=f"C{k % 10}",
                            label=curve.name)
         panel.set_ylabel(f"{label}\n(the same rolling means)")
         panel.set_ylim(0, top)
         panel.grid(alpha=0.3)
         _legend_beside(panel)
+    marks = []
     for k, curve in enumerate(curves):
         colour = f"C{k % 10}"
+        games = curve.start + curve.episodes
         for n, (start, end, stage) in enumerate(phases(curve.stages)):
             part = slice(start, end)
-            ax.plot(curve.episodes[part], curve.wins[part], color=colour,
+            ax.plot(games[part], curve.wins[part], color=colour,
                     label=None if n else f"{curve.name}: win")
-            ax.plot(curve.episodes[part], curve.losses[part], color=colour, linestyle="--",
+            ax.plot(games[part], curve.losses[part], color=colour, linestyle="--",
                     label=None if n else f"{curve.name}: loss")
-            _mark_phase(ax, curve.episodes[start], stage, colour, k)
+            marks.append((games[start], stage, colour))
     ax.set_ylim(0, 1)
     ax.set_ylabel(f"learner's team: {WINDOW:,}-episode\nmean of RLlib's {RLLIB_WINDOW}-episode "
                   f"rates")
-    (panels or [ax])[-1].set_xlabel("training episodes (lifetime)")
+    (panels or [ax])[-1].set_xlabel(_games_label(curves))
     ax.grid(alpha=0.3)
     _legend_beside(ax)
     fig.suptitle("Training win and loss rates per curriculum phase (beside Fig. 3)")
+    _mark_phases(fig, {ax: marks})
     fig.savefig(out, dpi=DPI)
     return fig
 

@@ -48,7 +48,7 @@ def _schedule(curriculum: dict) -> str:
 
 def _start_lines(source: dict, games: int) -> list[str]:
     """Where pi began, where `checkpoint_policy.starting_policy` could prove it, and the games
-    counted from the clone its lineage starts at (`checkpoint_policy.lineage`)."""
+    counted from the clone its lineage starts at (`history.lineage`)."""
     if not source.get("pi_start"):
         return []
     lines = [f"- pi started from `{source['pi_start']}` (its `pi.pt` equals pi at the end of the "

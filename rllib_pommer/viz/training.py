@@ -23,7 +23,8 @@ OUTCOME_KEYS = ("win", "loss", "tie")
 
 @dataclass
 class TrainingCurve:
-    """One run: per kept row, the lifetime episodes, the rolling mean return and the phase."""
+    """One run: per kept row, its own lifetime episodes, the rolling mean return and the phase;
+    `start + episodes` counts the games from the imitation clone (Fig. 3's axis)."""
 
     name: str
     episodes: np.ndarray
@@ -35,6 +36,8 @@ class TrainingCurve:
     kills: np.ndarray | None = None  # enemies its team killed per game, the same mean (NaN: not
     # logged; None: all NaN)
     bombs: np.ndarray | None = None  # bombs each learner agent laid per game, the same
+    start: int = 0  # games pi had played before the run's first, counted from the imitation clone
+    origin: str | None = None  # the shipped policy pi started from (None: not known)
 
     def __post_init__(self):
         for field in ("kills", "bombs"):

@@ -4,20 +4,28 @@ restores and clocks, summaries, stage figures."""
 from __future__ import annotations
 
 import json
+import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from rllib_pommer.rl.history import (
+    Origin,
+    exported_training,
     league_curves,
     read_rows,
     rolling_mean,
+    run_origin,
+    run_training,
     stage_figures,
     training_curve,
     write_summary,
 )
-from rllib_pommer.viz.figures import plot_league, plot_outcomes
+from rllib_pommer.viz.figures import plot_league, plot_outcomes, plot_training
 from rllib_pommer.viz.tables import training_table
+
+REPO = Path(__file__).resolve().parents[2]
 
 
 def _trial_with_progress(folder, progress_csv: str):
@@ -287,3 +295,59 @@ def test_league_curves_weight_each_members_rows_by_its_games_and_carry_shares(tm
     figure = plot_league(league, tmp_path / "league.png")
     assert (tmp_path / "league.png").stat().st_size > 10_000
     assert [ax.get_title() for ax in figure.axes[:2]] == ["ppo", "static"]
+
+
+def _games(policy: str) -> int:
+    """The games the run that exported `policy` trained it, from the policy folder's history."""
+    _, training = exported_training(REPO / "policies" / policy)
+    return sum(stage.episodes for stage in training.stages)
+
+
+def _continued_run(folder, start_weights):
+    """A run folder whose curriculum starts pi from `start_weights`, with one trial of two
+    iterations (10 and 20 games), as the trainer notes and logs them."""
+    curriculum = folder / "continued.toml"
+    folder.mkdir()
+    curriculum.write_text(f'name = "continued"\npi_weights = "{start_weights}"\n'
+                          '[[stage]]\nname = "simple"\nopponent = "simple"\nepisodes = 20\n')
+    (folder / "curriculum.json").write_text(json.dumps({"curriculum": str(curriculum),
+                                                        "name": "continued"}))
+    trial = folder / "PPO_pommerman_team_00000"
+    trial.mkdir()
+    rows = [{"training_iteration": i, "curriculum": {"iteration_stage_name": "simple"},
+             "env_runners": {"num_episodes_lifetime": 10 * i, "episode_return_mean": 0.5}}
+            for i in (1, 2)]
+    (trial / "result.json").write_text("".join(json.dumps(r) + "\n" for r in rows))
+    return folder
+
+
+@pytest.mark.parametrize(("policy", "before"), [
+    ("ppo", ("ppo",)),  # paper_dual_clip, the first leagues
+    ("ppo_league", ("ppo", "ppo_league")),  # the second leagues: ppo_league's lineage adds up
+    ("imitation", ()),  # a run from the clone starts at 0
+])
+def test_a_continued_run_starts_at_the_games_of_the_policy_it_continued(tmp_path, policy,
+                                                                         before):
+    """The run's curriculum names the weights pi started from; the shipped policy holding them
+    and the games of its lineage, counted from the imitation clone, are where its curve starts.
+    The report's summary of the run notes that origin, so a redraw from it starts there too."""
+    run = _continued_run(tmp_path / "run", REPO / "policies" / policy / "pi.pt")
+    games = sum(_games(name) for name in before)
+    assert run_origin(run / "PPO_pommerman_team_00000") == Origin(policy, games)
+    training = run_training([run], summaries=tmp_path / "summaries")
+    (curve,) = training.curves
+    assert (curve.origin, curve.start) == (policy, games)
+    np.testing.assert_array_equal(curve.episodes, [10, 20])  # the run's own count stays
+    (again,) = run_training([tmp_path / "summaries" / "run"]).curves
+    assert (again.origin, again.start) == (policy, games)
+    (line, *_) = plot_training([curve], tmp_path / "fig3.png").axes[0].get_lines()
+    np.testing.assert_array_equal(line.get_xdata(), [games + 10, games + 20])
+
+
+def test_a_run_started_from_weights_no_policy_ships_starts_at_zero(tmp_path):
+    weights = tmp_path / "elsewhere" / "pi.pt"
+    weights.parent.mkdir()
+    shutil.copy(REPO / "policies" / "ppo" / "pi.pt", weights)  # equal weights, not a policy's file
+    run = _continued_run(tmp_path / "run", weights)
+    assert run_origin(run / "PPO_pommerman_team_00000") == Origin()
+    assert training_curve(run / "PPO_pommerman_team_00000").start == 0

@@ -208,3 +208,32 @@ def test_each_fig3_reading_stands_beside_the_phase_rows_that_test_it():
     cautious = next(k for k, text in enumerate(section) if "cautious agent's reward" in text)
     assert section[cautious + 1] == "none of these runs reached these phases."
     assert all(claim.reading in "".join(section) for claim in FIG3_CLAIMS)
+
+
+def test_fig3_names_phases_once_where_runs_share_them_and_never_over_each_other(tmp_path):
+    """A dozen runs whose phases start together (the clone's runs at 0, the continued ones at
+    the policy they continued) keep their phase names legible: a name several runs start at one
+    place is written once, and no two names overlap."""
+    def curve(name, start, stages):
+        n = len(stages)
+        return TrainingCurve(name, np.arange(1, n + 1) * 1_000.0, np.zeros(n), stages,
+                             ["raw_kills"] * n, np.full(n, 0.5), np.full(n, 0.1), start=start,
+                             origin="ppo" if start else None)
+
+    clone = [curve(f"clone_{k}", 0, ["value_warmup", "static", "simple_nobomb", "simple"])
+             for k in range(4)]
+    continued = [curve(f"league_{k}", 83_562, ["value_warmup", f"league_{k}", "league_end"])
+                 for k in range(8)]
+    for plot in (plot_training, plot_outcomes):
+        fig = plot(clone + continued, tmp_path / "fig.png")
+        ax = fig.axes[0]
+        names = list(ax.texts)
+        shown = [text.get_text() for text in names]
+        assert shown.count("value_warmup") == 2  # at 0 and at 83,563, each once, in grey
+        assert shown.count("static") == 1 and shown.count("league_end") == 1
+        assert {f"league_{k}" for k in range(8)} <= set(shown)
+        fig.draw_without_rendering()  # where the names stand at the figure's own dpi
+        boxes = [(text.get_text(), text.get_window_extent()) for text in names]
+        assert not [(a, b) for i, (a, box) in enumerate(boxes) for b, other in boxes[i + 1:]
+                    if box.overlaps(other)]
+        assert "from `ppo` at 83,562" in (fig.axes[-1].get_xlabel())
