@@ -11,6 +11,7 @@ import textwrap
 from pathlib import Path
 
 import numpy as np
+from matplotlib import colormaps
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
@@ -35,6 +36,11 @@ REWARD_AXES = {"shaped": "shaped reward (the paper's)", "raw": "raw reward (the 
                "": "reward kind not logged"}
 
 
+def run_colour(k: int) -> tuple:
+    """The colour of a figure's k-th run: twenty, the ten dark ones of tab20 first."""
+    return colormaps["tab20"]((2 * k + (k // 10) % 2) % 20)
+
+
 def plot_training(curves: list[TrainingCurve], out: Path) -> Figure:
     """Fig. 3: each run's learner return, one axis per reward kind, one segment per curriculum
     phase with the phase names at their starts (what the mean is over: viz/training.py), over
@@ -45,12 +51,12 @@ def plot_training(curves: list[TrainingCurve], out: Path) -> Figure:
     if unknown:
         raise ValueError(f"Fig. 3: unknown reward kind(s) {unknown}; known: {list(REWARD_AXES)}")
     kinds = kinds or [""]
-    fig = Figure(figsize=(12, 1.6 + 3.6 * len(kinds)), layout="constrained")
+    fig = Figure(figsize=(12, 1.6 + 4.2 * len(kinds)), layout="constrained")
     axes = dict(zip(kinds, fig.subplots(len(kinds), 1, sharex=True, squeeze=False)[:, 0],
                     strict=True))
     marks: dict = {ax: [] for ax in axes.values()}
     for k, curve in enumerate(curves):
-        colour = f"C{k % 10}"
+        colour = run_colour(k)
         labelled = set()
         games = curve.start + curve.episodes
         for start, end, (stage, kind) in phases(list(zip(curve.stages, curve.rewards,
@@ -133,6 +139,7 @@ def _legend_beside(ax) -> None:
 
 
 PHASE_FONT = 7  # points
+LABEL_BAND = 0.45  # the part of an axis, from its top, that phase names may take
 
 
 def _mark_phases(fig: Figure, marks: dict) -> None:
@@ -166,14 +173,26 @@ def _mark_phases(fig: Figure, marks: dict) -> None:
         sizes = [text.get_window_extent() for text in texts.values()]  # in pixels, as drawn
         width = max(size.width for size in sizes) + 1
         height = (max(size.height for size in sizes) + 4) / ax.get_window_extent().height
-        last = [-math.inf] * max(1, int(0.98 // height))
+        last = [-math.inf] * min(max(2, int(LABEL_BAND // height)), max(1, int(0.98 // height)))
+        used = 0
         for (games, _), text in texts.items():
             x = games / per_pixel
             free = [lane for lane in range(len(last)) if x - last[lane] >= width]
             lane = free[0] if free else int(np.argmin(last))
             last[lane] = x = max(x, last[lane] + width)  # no lane free: just right of the last
+            used = max(used, lane + 1)
             text.xy = text.xyann = (x * per_pixel, 0.98 - lane * height)
             text.set_in_layout(False)
+        _make_room(ax, min(0.9, used * height + 0.02))
+
+
+def _make_room(ax, band: float) -> None:
+    """Raise the axis' top so that the curves stay below its top `band` (a fraction of the
+    axis), where the phase names stand; the ticks stay those of the curves' range."""
+    low, high = ax.get_ylim()
+    ticks = [tick for tick in ax.get_yticks() if low <= tick <= high]
+    ax.set_ylim(low, low + (high - low) / (1 - band))
+    ax.set_yticks(ticks)
 
 
 def _data_per_pixel(ax) -> float:
@@ -187,41 +206,44 @@ OUTCOME_PANELS = (("kills", "enemies killed per game", 2),
 
 
 def plot_outcomes(curves: list[TrainingCurve], out: Path) -> Figure:
-    """Beside Fig. 3: each run's training win rate (solid) and loss rate (dashed), the same
+    """Beside Fig. 3: each run's training win rate (solid) and loss rate (dashed; the legend
+    names each run once, then the two styles), the same
     rolling means per phase; one scale for every run, whatever its reward. Below, where some run
     logs them, one panel each for the enemies its team killed per game (game/kills.py) and the
     bombs each learner agent laid per game: a run that learns to hide lays none."""
     below = [(field, label, top) for field, label, top in OUTCOME_PANELS
              if any(np.isfinite(getattr(curve, field)).any() for curve in curves)]
-    fig = Figure(figsize=(12, 4.6 + 3.0 * len(below)), layout="constrained")
-    ax, *panels = fig.subplots(1 + len(below), 1, sharex=True, squeeze=False)[:, 0]
+    fig = Figure(figsize=(12, 6.4 + 3.0 * len(below)), layout="constrained")
+    ax, *panels = fig.subplots(1 + len(below), 1, sharex=True, squeeze=False,
+                               height_ratios=[5.4] + [3.0] * len(below))[:, 0]
     for panel, (field, label, top) in zip(panels, below, strict=True):
         for k, curve in enumerate(curves):
             if np.isfinite(getattr(curve, field)).any():
                 panel.plot(curve.start + curve.episodes, getattr(curve, field),
-                           color=f"C{k % 10}",
-                           label=curve.name)
+                           color=run_colour(k), label=curve.name)
         panel.set_ylabel(f"{label}\n(the same rolling means)")
         panel.set_ylim(0, top)
         panel.grid(alpha=0.3)
         _legend_beside(panel)
     marks = []
     for k, curve in enumerate(curves):
-        colour = f"C{k % 10}"
+        colour = run_colour(k)
         games = curve.start + curve.episodes
         for n, (start, end, stage) in enumerate(phases(curve.stages)):
             part = slice(start, end)
             ax.plot(games[part], curve.wins[part], color=colour,
-                    label=None if n else f"{curve.name}: win")
-            ax.plot(games[part], curve.losses[part], color=colour, linestyle="--",
-                    label=None if n else f"{curve.name}: loss")
+                    label=None if n else curve.name)
+            ax.plot(games[part], curve.losses[part], color=colour, linestyle="--")
             marks.append((games[start], stage, colour))
     ax.set_ylim(0, 1)
     ax.set_ylabel(f"learner's team: {WINDOW:,}-episode\nmean of RLlib's {RLLIB_WINDOW}-episode "
                   f"rates")
     (panels or [ax])[-1].set_xlabel(_games_label(curves))
     ax.grid(alpha=0.3)
-    _legend_beside(ax)
+    handles, names = ax.get_legend_handles_labels()
+    ax.legend(handles + [Line2D([], [], color="black", label="win"),
+                         Line2D([], [], color="black", linestyle="--", label="loss")],
+              names + ["win", "loss"], fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     fig.suptitle("Training win and loss rates per curriculum phase (beside Fig. 3)")
     _mark_phases(fig, {ax: marks})
     fig.savefig(out, dpi=DPI)
