@@ -45,6 +45,7 @@ from ..game.observation import Observation
 from ..game.state import (
     A_ALIVE,
     A_AMMO,
+    A_BLAST,
     A_COL,
     A_ROW,
     B_BLAST,
@@ -71,7 +72,7 @@ from .belief import (
 )
 from .belief import new_memory as new_belief_memory
 from .rng import next_uniform, seed_states
-from .survival import escape_cells, play_scenario
+from .survival import _walk_steps, escape_cells, play_scenario
 
 STOP, BOMB = int(Action.STOP), int(Action.BOMB)
 RIGID, WOOD, BOMB_CODE, FOG = (int(i) for i in (Item.RIGID, Item.WOOD, Item.BOMB, Item.FOG))
@@ -96,6 +97,10 @@ POWER_UP = 60.0  # per power-up picked up
 HUNT = 6.0  # per unit of path cost to the nearest enemy
 WOOD_COST, BOMB_COST = 4, 2  # path cost of entering a wooden cell, a bomb's cell; others 1
 ENEMY_WALK = 2  # steps an enemy may walk in the pessimistic scenario, its body blocking
+THREATENED = -1.5e3  # some enemy can walk to a cell near the agent and trap it with a bomb there
+THREAT = -1e2  # ... and per such cell
+THREAT_REACH = 2  # such cells lie within blast - 1 + depth + THREAT_REACH of the agent's cell
+MAX_THREATS = 40  # threat scenarios kept per recording
 STALE = 10  # with no enemy to head for: fogged cells seen at most this long after the oldest
 
 
@@ -219,8 +224,50 @@ def _wood_burnt(board, bombs, meta, me, depth):
 
 
 @njit(cache=True)
-def _leaf_score(lb, la, lbo, lf, li, lm, lr, root_alive, me, game_type, depth, hunt, cache_keys,
-                cache_plain_fire, cache_plain_blocked, cache_pess_fire, cache_pess_blocked,
+def _record_threats(lb, la, lbo, lf, li, lm, lr, me, game_type, depth, home, fire, blocked):
+    """Record the threat scenarios of a leaf (docs/search.md §3): for each believed enemy and
+    each free cell it can walk to within `depth` steps (the steps it stood still in the tree)
+    that lies near `home` (the agent's cell at the root), that enemy standing there and laying
+    a bomb on the first step, everybody else standing still without bombs. Returns how many
+    were written into `fire`, `blocked` (K, H, S, S)."""
+    size = lb.shape[0]
+    near = np.zeros((size, size), np.int64)
+    board = lb.copy()
+    agents = la.copy()
+    bombers = np.zeros(NUM_AGENTS, np.bool_)
+    n = 0
+    for e in range(NUM_AGENTS):
+        if la[e, A_ALIVE] == 0 or not _is_enemy(me, e, game_type):
+            continue
+        er, ec = la[e, A_ROW], la[e, A_COL]
+        reach = la[e, A_BLAST] - 1 + depth + THREAT_REACH
+        if abs(er - home[0]) + abs(ec - home[1]) > reach + depth:
+            continue
+        _walk_steps(lb, er, ec, depth, near)
+        bombers[:] = False
+        bombers[e] = True
+        for r in range(size):
+            for c in range(size):
+                if near[r, c] > depth or abs(r - home[0]) + abs(c - home[1]) > reach:
+                    continue
+                if n >= fire.shape[0]:
+                    return n
+                board[:] = lb
+                agents[:] = la
+                if board[er, ec] == AGENT0 + e:
+                    board[er, ec] = 0
+                board[r, c] = AGENT0 + e
+                agents[e, A_ROW], agents[e, A_COL] = r, c
+                play_scenario(board, agents, lbo, lf, li, lm, lr, me, bombers, 0, 0, fire[n],
+                              blocked[n])
+                n += 1
+    return n
+
+
+@njit(cache=True)
+def _leaf_score(lb, la, lbo, lf, li, lm, lr, root_alive, me, game_type, depth, hunt, home,
+                cache_keys, cache_plain_fire, cache_plain_blocked, cache_pess_fire,
+                cache_pess_blocked, cache_n_threats, cache_threat_fire, cache_threat_blocked,
                 n_cached):
     """The score of one leaf (module docstring); returns (score, cache entries used)."""
     mr, mc = la[me, A_ROW], la[me, A_COL]
@@ -241,6 +288,9 @@ def _leaf_score(lb, la, lbo, lf, li, lm, lr, root_alive, me, game_type, depth, h
             bombers[a] = la[a, A_ALIVE] != 0 and _is_enemy(me, a, game_type)
         play_scenario(lb, la, lbo, lf, li, lm, lr, me, bombers, ENEMY_WALK, depth,
                       cache_pess_fire[slot], cache_pess_blocked[slot])
+        cache_n_threats[slot] = _record_threats(
+            lb, la, lbo, lf, li, lm, lr, me, game_type, depth, home, cache_threat_fire[slot],
+            cache_threat_blocked[slot])
     plain_fire, plain_blocked = cache_plain_fire[slot], cache_plain_blocked[slot]
     score = 0.0
     if escape_cells(plain_fire, plain_blocked, mr, mc, 1) == 0:
@@ -251,6 +301,12 @@ def _leaf_score(lb, la, lbo, lf, li, lm, lr, root_alive, me, game_type, depth, h
             break
     room = escape_cells(cache_pess_fire[slot], cache_pess_blocked[slot], mr, mc, ROOM_CAP)
     score += CORNERED if room == 0 else ROOM * room
+    threats = 0
+    for k in range(cache_n_threats[slot]):
+        if escape_cells(cache_threat_fire[slot, k], cache_threat_blocked[slot, k], mr, mc, 1) == 0:
+            threats += 1
+    if threats > 0:
+        score += THREATENED + THREAT * threats
     for a in range(NUM_AGENTS):
         if a == me or not root_alive[a]:
             continue
@@ -290,6 +346,10 @@ def root_values(board, agents, bombs, flames, items, meta, radio, me, game_type,
     plain_blocked = np.empty((leaves, horizon, size, size), np.bool_)
     pess_fire = np.empty((leaves, horizon, size, size), np.bool_)
     pess_blocked = np.empty((leaves, horizon, size, size), np.bool_)
+    n_threats = np.zeros(leaves, np.int64)
+    threat_fire = np.empty((leaves, MAX_THREATS, horizon, size, size), np.bool_)
+    threat_blocked = np.empty((leaves, MAX_THREATS, horizon, size, size), np.bool_)
+    home = np.array([agents[me, A_ROW], agents[me, A_COL]], np.int64)
     n_cached = 0
     root_alive = agents[:, A_ALIVE] != 0
     actions = np.zeros(NUM_AGENTS, np.int64)
@@ -331,11 +391,28 @@ def root_values(board, agents, bombs, flames, items, meta, radio, me, game_type,
         else:
             score, n_cached = _leaf_score(
                 lb[nxt], la[nxt], lbo[nxt], lf[nxt], li[nxt], lm[nxt], lr[nxt], root_alive, me,
-                game_type, depth, hunt, cache_keys, plain_fire, plain_blocked, pess_fire,
-                pess_blocked, n_cached)
+                game_type, depth, hunt, home, cache_keys, plain_fire, plain_blocked, pess_fire,
+                pess_blocked, n_threats, threat_fire, threat_blocked, n_cached)
             score += gain[nxt]
         value[chosen[0]] = max(value[chosen[0]], score)
+    for action in range(1, 5):
+        if value[action] > value[STOP] and _contested(agents, me, action):
+            value[action] = 0.5 * (value[action] + value[STOP])
     return value
+
+
+@njit(cache=True)
+def _contested(agents, me, action):
+    """Whether another living agent stands next to the cell `action` moves `me` onto, so that
+    it may step there too and both bounce back (docs/search.md §2)."""
+    rr = agents[me, A_ROW] + ACTION_DR[action]
+    cc = agents[me, A_COL] + ACTION_DC[action]
+    for a in range(NUM_AGENTS):
+        if a == me or agents[a, A_ALIVE] == 0:
+            continue
+        if abs(agents[a, A_ROW] - rr) + abs(agents[a, A_COL] - cc) == 1:
+            return True
+    return False
 
 
 @njit(cache=True)
