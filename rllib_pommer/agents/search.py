@@ -4,14 +4,18 @@ of Osogami and Takahashi's real-time tree search (ACML 2019), in our own words a
 
 Per decision the agent rebuilds the state it believes in from its observation and memory
 (`belief.py`), then tries every sequence of its own actions `depth` steps deep on copies of that
-state with the compiled step, everybody else standing still. Each leaf is judged by two
-scenarios played forward `horizon` steps (`survival.py`): a plain one (the bombs on the board go
-off) and a pessimistic one (every believed enemy also lays a bomb where it stands). Its score
-puts surviving first (a way out of the plain scenario, then of the pessimistic one, then room to
-move), then the enemies it kills or leaves without a way out of the plain scenario, its
+state with the compiled step, everybody else standing still (moves onto another agent's cell are
+not tried). Each leaf is judged by scenarios played forward `horizon` steps (`survival.py`): a
+plain one (the bombs on the board go off), a pessimistic one (every believed enemy also lays a
+bomb where it stands, its body in the way nearby) and threat scenarios (one enemy walks to a cell
+near the agent within the tree's steps and lays a bomb there). Its score puts surviving first (a
+way out of the plain scenario, then of the pessimistic one, then of every threat scenario, then
+room to move), then the enemies it kills or leaves without a way out of the plain scenario, its
 teammate's way out, then wood its new bombs burn, power-ups it picks up and how near it comes to
 the nearest enemy (a path cost where wood counts extra, so it bombs its way through). An action
-is worth its best leaf; ties are broken by a draw from the agent's own seeded stream.
+is worth its best leaf, a move onto a cell next to another agent the mean of that and Stop's
+(both may step there and bounce back); ties are broken by a draw from the agent's own seeded
+stream.
 
 The effort (depth, horizon, recall) comes from the policy file (`Effort.from_spec`), never from
 a clock, so a seeded game replays exactly. `search_actions` decides for a batch of observation

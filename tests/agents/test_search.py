@@ -1,5 +1,6 @@
 """The search agent: it sees only its observation, replays exactly by seed, beats SimpleAgent, and
-refuses a bad effort naming the file, the key and the value."""
+refuses a bad effort naming the file, the key and the value; its tree does not walk onto other
+agents, discounts a move another agent could make too, and sees an enemy's trap."""
 
 from __future__ import annotations
 
@@ -8,12 +9,31 @@ import pytest
 
 from rllib_pommer.agents.belief import empty_belief, rebuild, remember
 from rllib_pommer.agents.registry import make_agent, resolve_policy
-from rllib_pommer.agents.search import Effort, SearchAgent
+from rllib_pommer.agents.search import (
+    MAX_THREATS,
+    Effort,
+    SearchAgent,
+    _record_threats,
+    root_values,
+)
+from rllib_pommer.agents.survival import escape_cells
 from rllib_pommer.arena.match import MatchSpec, play_match
 from rllib_pommer.arena.records import summarise
-from rllib_pommer.game.constants import TEAM_PRESET, Item
+from rllib_pommer.game.constants import BOARD_SIZE, TEAM_PRESET, Action, Item
 from rllib_pommer.game.engine import Games
-from rllib_pommer.game.state import B_BLAST, B_COL, B_LIFE, B_OWNER, B_ROW, M_BOMBS
+from rllib_pommer.game.state import (
+    A_ALIVE,
+    A_AMMO,
+    A_BLAST,
+    A_COL,
+    A_ROW,
+    B_BLAST,
+    B_COL,
+    B_LIFE,
+    B_OWNER,
+    B_ROW,
+    M_BOMBS,
+)
 
 ME = 0
 
@@ -112,3 +132,61 @@ def test_a_bad_effort_names_the_file_key_and_value(tmp_path, line, message):
 def test_the_policy_files_set_the_effort():
     assert make_agent("search").effort == Effort(**resolve_policy("search").params)
     assert make_agent("search_fast").effort.depth < make_agent("search").effort.depth
+
+
+def _open_state(agents: dict, blast: int = 2):
+    """A believed state on an empty board (all Passage) with the given agents {seat: (row, col)}
+    alive, each with one bomb of strength `blast`; the others absent."""
+    board, table, bombs, flames, items, meta, radio = empty_belief()
+    for seat, (r, c) in agents.items():
+        table[seat, [A_ROW, A_COL, A_ALIVE, A_AMMO, A_BLAST]] = [r, c, 1, 1, blast]
+        board[r, c] = Item.AGENT0 + seat
+    return board, table, bombs, flames, items, meta, radio
+
+
+def _values(state, me=ME, depth=2):
+    hunt = np.zeros(state[0].shape, np.int64)
+    return root_values(*state, me, int(TEAM_PRESET.game_type), depth, 10, hunt)
+
+
+def test_a_move_onto_another_agents_cell_is_not_tried():
+    values = _values(_open_state({ME: (5, 5), 1: (4, 5), 2: (5, 7)}))
+    assert values[Action.UP] == -np.inf
+    assert np.isfinite(values[[Action.STOP, Action.DOWN, Action.LEFT, Action.RIGHT]]).all()
+
+
+def test_a_move_onto_a_cell_another_agent_could_enter_is_worth_less():
+    """Standing on its own bomb, the agent must leave; a way out whose first cell the teammate
+    could step onto too (both would bounce) is worth the mean of its value and Stop's."""
+    def standing_on_a_bomb(agents):
+        state = _open_state(agents)
+        bombs, meta = state[2], state[5]
+        bombs[0, [B_ROW, B_COL, B_OWNER, B_LIFE, B_BLAST]] = [5, 5, ME, 3, 2]
+        meta[M_BOMBS] = 1
+        return state
+
+    alone = _values(standing_on_a_bomb({ME: (5, 5)}))
+    assert alone[Action.UP] == alone[Action.DOWN] > alone[Action.STOP]
+    crowded = _values(standing_on_a_bomb({ME: (5, 5), 2: (3, 5)}))
+    assert crowded[Action.UP] < crowded[Action.DOWN]
+    assert crowded[Action.UP] > crowded[Action.STOP]
+
+
+def test_an_enemy_that_can_walk_up_and_trap_the_agent_is_a_threat():
+    """In a dead end, an enemy of blast 3 two steps from the cell where its bomb seals the agent
+    in gives a threat scenario the agent cannot survive; far away, it gives none."""
+    def corridor(enemy_col):
+        state = _open_state({ME: (5, 0), 1: (5, enemy_col)}, blast=3)
+        board = state[0]
+        board[4, :7] = board[6, :7] = Item.RIGID
+        return state
+
+    size = BOARD_SIZE
+    fire = np.zeros((MAX_THREATS, 10, size, size), np.bool_)
+    blocked = np.zeros_like(fire)
+    home = np.array([5, 0], np.int64)
+    game_type = int(TEAM_PRESET.game_type)
+    near = _record_threats(*corridor(4), ME, game_type, 2, home, fire, blocked)
+    trapped = [escape_cells(fire[k], blocked[k], 5, 0, 1) == 0 for k in range(near)]
+    assert near > 0 and any(trapped) and not all(trapped)
+    assert _record_threats(*corridor(10), ME, game_type, 2, home, fire, blocked) == 0
