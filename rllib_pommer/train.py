@@ -79,14 +79,14 @@ def main(argv: list[str] | None = None) -> int:
 
     try:  # everything that can be checked is checked before Ray starts
         settings = settings_from(RunSettings, args)
-        curriculum, out = start_run(settings, lambda line: print(line, file=sys.stderr))
+        curriculum, out, start = start_run(settings, lambda line: print(line, file=sys.stderr))
     except ValueError as exc:
         parser.error(str(exc))
     except RayStartError as exc:  # not the user's input: one line and exit 1, no traceback
         ray.shutdown()
         return report_error(exc, 1)
     try:
-        result = train(curriculum, out, settings)
+        result = train(curriculum, out, settings, start)
     except ValueError as exc:
         return report_error(exc)
     finally:
@@ -123,12 +123,8 @@ def _pack(parser: argparse.ArgumentParser, out: Path | None) -> int:
     except ValueError as exc:
         return report_error(exc)
     size = sum(p.stat().st_size for p in out.rglob("*") if p.is_file())
-    for trial, (checkpoint, registered) in kept.items():
-        print(f"{out / trial}: kept {checkpoint}, results folded into history.csv")
-        if checkpoint != registered:
-            print(f"  Tune's state named {registered} (the run stopped before registering the "
-                  f"newest checkpoint, or resumed under stale numbers); it now resumes from "
-                  f"{checkpoint}")
+    print(f"{out}: kept {kept.relative_to(out.resolve()) if kept else 'no checkpoint'}; "
+          f"results folded into each trial's history.csv")
     print(f"{out}: {size / 2**20:.1f} MiB; continue anywhere with "
           f"`python -m rllib_pommer.train --out {out} --resume`")
     return 0

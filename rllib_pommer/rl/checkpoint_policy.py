@@ -42,6 +42,7 @@ from .history import (
     POLICY_HISTORY_DIR,
     POLICY_SOURCE_FILE,
     Trial,
+    legs,
     lineage,
     number,
     read_trial,
@@ -188,10 +189,8 @@ def checkpoint_complete(checkpoint: Path) -> bool:
 
 def checkpoint_age(path: Path) -> tuple[int, float, str]:
     """A checkpoint's (training iteration, mtime, name), to find the newest: not its number,
-    which Tune restarted below the highest one when it resumed under a stale counter (a resumed
-    run wrote checkpoint_000036 after the checkpoint_000037 it resumed from; packing now resets
-    the counter, `tune_state.py`). One that is not whole (`checkpoint_complete`) or cannot be
-    read (older than algorithm states) comes first."""
+    which every leg of a run (each resume, rl/history.legs) starts again from 0. One that is not
+    whole (`checkpoint_complete`) or cannot be read (older than algorithm states) comes first."""
     try:
         iteration = checkpoint_iteration(path) if checkpoint_complete(path) else -1
     except (ValueError, OSError):
@@ -216,14 +215,17 @@ def _git(folder: Path, *args: str) -> str:
 
 def _trial_of(checkpoint: Path) -> Path:
     """The trial folder whose rows and params a checkpoint belongs with: its parent, or for a
-    stage's checkpoint (`<run>/stages/<n>-<name>`) the run's one trial."""
+    stage's checkpoint (`<run>/stages/<n>-<name>`) the run's newest leg (history.legs), whose
+    history holds the rows of every leg."""
     if (checkpoint.parent / "params.json").is_file():
         return checkpoint.parent
     trials = trial_dirs(checkpoint.parents[1])
-    if len(trials) != 1:
+    newest = max(trials, key=lambda trial: len(legs(trial)), default=None)
+    if newest is None or len(legs(newest)) != len(trials):
         raise ValueError(f"{checkpoint}: not in a trial folder, and its run "
-                         f"{checkpoint.parents[1]} has {len(trials)} trials, not one")
-    return trials[0]
+                         f"{checkpoint.parents[1]} has {len(trials)} trials, not the legs of "
+                         f"one run")
+    return newest
 
 
 def packed_commits(run: Path, trial: Trial) -> list[str]:

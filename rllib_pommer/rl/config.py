@@ -49,22 +49,19 @@ from ray.rllib.core.rl_module.multi_rl_module import MultiRLModuleSpec
 from ray.rllib.core.rl_module.rl_module import RLModuleSpec
 
 from ..imitation.learned import load_policy_net
-from .callbacks import CurriculumCallback
 from .checkpoint_policy import NET_OUTPUTS
-from .connectors import LearnerFilters
-from .curriculum import Curriculum
+from .connectors import learner_filters
+from .curriculum import Curriculum, curriculum_ref
 from .env import ENV_NAME
 from .fixed_modules import fixed_module_spec
-from .league import snapshot_specs
+from .league import LeagueCallback, snapshot_specs
 from .learner import DUAL_CLIP_KEY, PommerPPOLearner
 from .mapping import SeatMapping
 from .names import EXPLOITER
+from .outcomes import OutcomeMetrics
 from .rl_module import LEARNER, PommerPPOModule
 from .settings import PPOSettings
-
-
-def _learner_filters(env=None, spaces=None, device=None):
-    return [LearnerFilters()]
+from .stages import StageCallback
 
 
 def _dual_clip(ppo: PPOSettings) -> dict:
@@ -96,13 +93,15 @@ def check_weights(path: Path, part: str = "pi", radio: bool = False) -> Path:
 def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None,
                  num_env_runners: int = 0, cpus_per_env_runner: float = 1.0,
                  seed: int = 0, env: str = ENV_NAME,
-                 restoring: bool = False) -> PPOConfig:
+                 restore_from: Path | None = None) -> PPOConfig:
     """PPO for `curriculum`; `pi_weights` overrides the file's; `env` may name another env with
-    the same spaces (the bench's zero-cost twin). `restoring`: the algorithm will load a
-    checkpoint, which holds pi, so the imitation weights may be absent (rl_module.py).
-    `num_env_runners` remote runners of `cpus_per_env_runner` Ray CPUs each sample while the
-    learner waits (its torch threads: names.LEARNER_THREADS_ENV). Tune resumes a run only with
-    the key set it started with, so no key may be added here for a run already under way."""
+    the same spaces (the bench's zero-cost twin). `restore_from`: a checkpoint the algorithm
+    loads when it is built (rl/stages.py), which holds pi, so the imitation weights may be
+    absent (rl_module.py). `num_env_runners` remote runners of `cpus_per_env_runner` Ray CPUs
+    each sample while the learner waits (its torch threads: names.LEARNER_THREADS_ENV). Every
+    object of ours the config holds is built from plain data by a class on the map's list of
+    stable import paths (docs/architecture.md), which is all a run's saved config names."""
+    restoring = restore_from is not None
     radio = curriculum.game == "radio"  # a property that parses the file: read it once
     weights = Path(pi_weights) if pi_weights else curriculum.pi_weights
     weights = weights.resolve() if restoring else check_weights(weights, radio=radio)
@@ -132,7 +131,7 @@ def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None
             num_env_runners=num_env_runners,
             num_cpus_per_env_runner=cpus_per_env_runner,
             num_envs_per_env_runner=ppo.num_envs_per_env_runner,
-            module_to_env_connector=_learner_filters,
+            module_to_env_connector=learner_filters,
             rollout_fragment_length="auto",
             episodes_to_numpy=False)
         .multi_agent(
@@ -147,6 +146,9 @@ def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None
             vf_loss_coeff=ppo.vf_loss_coeff, use_kl_loss=ppo.use_kl_loss,
             grad_clip=ppo.grad_clip, **_dual_clip(ppo))
         .learners(learner_class=PommerPPOLearner)
-        .callbacks(partial(CurriculumCallback, curriculum))
+        .callbacks([partial(LeagueCallback, curriculum_ref(curriculum)),  # the gate first
+                    partial(StageCallback, curriculum_ref(curriculum),
+                            str(restore_from) if restoring else None),
+                    OutcomeMetrics])
         .debugging(seed=seed)
     )

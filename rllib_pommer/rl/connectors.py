@@ -142,3 +142,9 @@ class LearnerFilters(ConnectorV2):
                 logp = dist.logp(torch.as_tensor(actions[0])).item()  # a float32's value
                 batch[Columns.ACTION_LOGP][key][0] = np.float32(logp)
         return batch
+
+
+def learner_filters(env=None, spaces=None, device=None) -> list[ConnectorV2]:
+    """The module-to-env pieces RLlib puts before its own (`module_to_env_connector`): the
+    filters."""
+    return [LearnerFilters()]

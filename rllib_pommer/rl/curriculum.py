@@ -364,12 +364,17 @@ def describe(curriculum: Curriculum) -> str:
     return repr(name) if name else f"{curriculum.name!r} ({curriculum.path})"
 
 
+def curriculum_ref(curriculum: Curriculum) -> str:
+    """The curriculum as a run's data names it, for `load_curriculum` to read again: its
+    shipped name (the run may move to another clone), else its file's absolute path."""
+    return shipped_name(curriculum.path) or str(curriculum.path.resolve())
+
+
 def record_run_curriculum(run: Path, curriculum: Curriculum) -> None:
     """Note in the run folder which curriculum the run trains on."""
-    name = shipped_name(curriculum.path)
     Path(run).mkdir(parents=True, exist_ok=True)
     (Path(run) / RUN_CURRICULUM_FILE).write_text(json.dumps(
-        {"curriculum": name or str(curriculum.path.resolve()), "name": curriculum.name}) + "\n")
+        {"curriculum": curriculum_ref(curriculum), "name": curriculum.name}) + "\n")
 
 
 def _recorded(run: Path) -> tuple[str, str, str] | None:

@@ -2,16 +2,18 @@
 what the training figures draw (`viz/training.py`: this module computes, viz/ draws).
 
 A trial directory holds `result.json` (one JSON result per line, flattened with "/" as Tune
-does; read first) or `progress.csv`, one row per training iteration, and, in a run packed to be
-carried to another machine (`rl.packing.pack_run`), `history.csv`: the summary rows of the
-iterations before the pack, read before the others. result.json comes first
-because Tune's CSV appends a resumed run's rows in the new results' column order under the old
-header when the set of keys changed, which scrambles the columns. A resumed trial repeats the
-iterations after its checkpoint: the rows of the restored run replace the ones it discarded. Its
-clock, `time_total_s`, restarts at 0 when Tune restored it from a checkpoint registered without
-its result (a pack repeated after the result.json line was cut, `rl.packing`), so the rows are
-given one clock that adds up each iteration's own seconds (`with_continuous_clock`). A
-line that is not JSON (a write cut short: a live run mid-line, or a run killed mid-write and then
+does; read first: Tune's CSV appends rows whose set of keys changed under the old header, which
+scrambles the columns) or `progress.csv`, one row per training iteration, and, in a run packed
+to be carried to another machine (`rl.packing.pack_run`), `history.csv`: the summary rows of the
+iterations before the pack, read before the others. A run holds one Tune trial per start, its
+legs (`legs`: each `--resume` starts a new trial from the newest checkpoint, rl/training.py),
+in the order of the start time Tune puts in the trial's name; a trial's history is its run's
+rows up to and including its own leg (`read_trial`), so a resumed run reads as one. A resumed
+run repeats the iterations after its checkpoint: the rows of the restored run replace the ones
+it discarded. Its clock, `time_total_s`, restarts at 0 in a new leg (and did in older runs
+restored from a checkpoint registered without its result), so the rows are given one clock
+that adds up each iteration's own seconds (`with_continuous_clock`). A line that is not JSON
+(a write cut short: a live run mid-line, or a run killed mid-write and then
 resumed) is skipped with a warning naming the file and line. Columns used:
 
 - the mean episode return: the first present of `RETURN_COLUMNS` (required);
@@ -50,6 +52,7 @@ import csv
 import json
 import math
 import os
+import re
 import warnings
 from collections import Counter
 from dataclasses import dataclass
@@ -116,11 +119,34 @@ def is_trial(path: Path) -> bool:
     return path.is_dir() and any((path / name).is_file() for name in TRIAL_FILES)
 
 
+# The start time Tune puts at the end of a trial folder's name (PPO_<env>_<id>_<n>_<time>).
+TRIAL_STARTED = re.compile(r"_(\d{4}-\d\d-\d\d_\d\d-\d\d-\d\d)$")
+
+
+def legs(trial: Path) -> list[Path]:
+    """The trials of `trial`'s run up to and including it, in the order they started: for a
+    folder Tune named (PPO_...), its siblings so named that hold results, ordered by the start
+    time in their names; any other trial folder (a report's summary) stands alone."""
+    trial = Path(trial)
+    if not trial.name.startswith("PPO_"):
+        return [trial]
+    run = [p for p in trial.parent.glob("PPO_*") if is_trial(p) or p == trial]
+
+    def started(path: Path) -> tuple[str, str]:
+        found = TRIAL_STARTED.search(path.name)
+        return (found.group(1) if found else "", path.name)
+    run.sort(key=started)
+    return run[:run.index(trial) + 1]
+
+
 def find_trials(path: Path) -> list[Path]:
-    """`path` if it is a trial directory, else the trial directories below it."""
+    """`path` if it is a trial directory, else the trial directories below it, one per run: the
+    newest leg of each, whose history holds the others (`legs`)."""
     if is_trial(path):
         return [path]
-    return sorted({p.parent for name in TRIAL_FILES for p in path.rglob(name)})
+    found = sorted({p.parent for name in TRIAL_FILES for p in path.rglob(name)})
+    return [trial for trial in found if not any(
+        trial in legs(other)[:-1] for other in found if other.parent == trial.parent)]
 
 
 def _flatten(result: dict, prefix: str = "") -> dict:
@@ -154,7 +180,8 @@ def _csv_rows(path: Path) -> list[dict]:
         return list(csv.DictReader(f))
 
 
-def read_rows(trial: Path) -> list[dict]:
+def _leg_rows(trial: Path) -> list[dict]:
+    """One trial folder's own rows, as written, each with the reward mode it was paid in."""
     rows = _csv_rows(trial / HISTORY_FILE) if (trial / HISTORY_FILE).is_file() else []
     if (trial / "result.json").is_file():
         rows += _json_rows(trial / "result.json")
@@ -162,8 +189,14 @@ def read_rows(trial: Path) -> list[dict]:
         rows += _csv_rows(trial / "progress.csv")
     started_with = _started_reward(trial)
     return [row if row.get(REWARD_COLUMN) or not started_with
-            else {**row, REWARD_COLUMN: started_with}
-            for row in with_continuous_clock(without_discarded(rows))]
+            else {**row, REWARD_COLUMN: started_with} for row in rows]
+
+
+def read_rows(trial: Path, whole_run: bool = True) -> list[dict]:
+    """The rows of `trial` in training order, restores resolved and on one clock: with
+    `whole_run`, those of every leg of its run up to it (`legs`), else its own alone."""
+    rows = [row for leg in (legs(trial) if whole_run else [trial]) for row in _leg_rows(leg)]
+    return with_continuous_clock(without_discarded(rows))
 
 
 def _started_reward(trial: Path) -> str:
@@ -188,8 +221,10 @@ class Trial:
         return run_name(self.path)
 
 
-def read_trial(trial: Trial | Path) -> Trial:
-    return trial if isinstance(trial, Trial) else Trial(Path(trial), read_rows(Path(trial)))
+def read_trial(trial: Trial | Path, whole_run: bool = True) -> Trial:
+    """A trial folder and its rows (`read_rows`): by default its run's up to it."""
+    return trial if isinstance(trial, Trial) else Trial(Path(trial),
+                                                        read_rows(Path(trial), whole_run))
 
 
 def write_summary(trial: Trial | Path, out: Path, name: str = "progress.csv") -> Path:

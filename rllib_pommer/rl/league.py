@@ -31,6 +31,16 @@ learner are counted in blocks (the book's `exploiter` tally); a block of `exploi
 won at `exploiter_gate_win` or more copies its pi into the next snapshot slot, where it stays in
 the learner's league as a frozen member, and the exploiter starts again from the learner's pi
 and vf as they are then, with fresh optimizer moments, to look for the next weakness.
+
+`LeagueCallback` runs the league after each iteration: the learner's league games
+(rl/outcomes.py counts them per member, summed over the iteration) go into the gate, which may
+fill the next slot from the learner's pi; the new member's weights go to every env runner, and
+the stage's callback (rl/stages.py) maps it at once. Under prioritized matchmaking the games go
+into the book first, the league's weights follow from it (rl/matchmaking.py) and reach every env
+runner's mapping in place. The result's `league` entry says how many snapshots play and where
+the gate's block stands (with an `exploiter` entry: its block and the slot it filled), and its
+`matchmaking` entry gives each member's share of the coming games, estimated win rate and
+decayed games.
 """
 
 from __future__ import annotations
@@ -39,12 +49,15 @@ from dataclasses import dataclass
 
 import numpy as np
 import torch
+from ray.rllib.callbacks.callbacks import RLlibCallback
 from ray.rllib.core.columns import Columns
 from ray.rllib.core.rl_module.rl_module import RLModule, RLModuleSpec
 from ray.rllib.core.rl_module.torch import TorchRLModule
+from ray.rllib.utils.metrics import ENV_RUNNER_RESULTS, NUM_EPISODES, NUM_EPISODES_LIFETIME
 
 from ..imitation.network import PommerNet
-from .matchmaking import Record
+from .curriculum import load_curriculum
+from .matchmaking import Record, priority
 from .names import EXPLOITER, LEARNER
 from .settings import LeagueSettings
 
@@ -203,3 +216,162 @@ def describe(book: list[Slot], settings: LeagueSettings) -> str:
     rate = slot.wins / slot.games if slot.games else float("nan")
     return (f"league {len(members(book))}/{settings.slots} snapshots, gate {slot.games}/"
             f"{settings.gate_games} games at {rate:.2f} (needs {settings.gate_win:.2f})")
+
+
+def count(runners: dict, key: str) -> int:
+    """A counter from the env runners' results; 0 when absent or NaN (an iteration in which no
+    episode ended, e.g. the first one after a restore, reports NaN)."""
+    value = runners.get(key, 0)
+    return 0 if value != value else int(value)
+
+
+def on_learner(algorithm, func):
+    """`func(learner)`'s value on the (first) learner, which holds the module states that
+    checkpoints save."""
+    return next(iter(algorithm.learner_group.foreach_learner(func))).get()
+
+
+def push_modules(algorithm, slots) -> None:
+    """The learner's copies of modules `slots` (snapshots, a restarted exploiter) onto every env
+    runner. Not RLlib's weight sync, which an env runner skips when the learner's weights
+    sequence number has not moved since the last sync (a slot filled after an update has the
+    same number), and which ran before the callback changed them."""
+    for slot in slots:
+        state = on_learner(algorithm, lambda learner, slot=slot: learner.module[slot].get_state())
+        algorithm.env_runner_group.foreach_env_runner(
+            lambda runner, slot=slot, state=state: runner.module[slot].set_state(state),
+            local_env_runner=True)
+
+
+def _book(algorithm, league: LeagueSettings) -> list[Slot]:
+    return on_learner(algorithm, lambda learner: read_book(learner, league))
+
+
+def _records(algorithm) -> dict[str, Record]:
+    """The matchmaking book: member -> Record."""
+    return on_learner(algorithm, lambda learner: learner.module[MATCHMAKING_MODULE].records())
+
+
+def league_members(algorithm, curriculum) -> tuple[str, ...]:
+    """The filled snapshot slots of `curriculum`'s league (none without a league)."""
+    return members(_book(algorithm, curriculum.league)) if curriculum.league else ()
+
+
+def _exploiter(curriculum) -> tuple[str, ...]:
+    league = curriculum.league
+    return (EXPLOITER,) if league is not None and league.exploiter else ()
+
+
+def matched(curriculum, stage) -> bool:
+    """Whether `stage` plays a league that meets the learner by prioritized matchmaking."""
+    league = curriculum.league
+    return (league is not None and league.prioritized
+            and (stage.self_play or isinstance(stage.opponent, tuple)))
+
+
+def league_opponent(algorithm, curriculum, stage):
+    """Who the learner meets in `stage`: its opponent or league, and in a self-play stage also
+    the exploiter and the filled snapshot slots."""
+    if not stage.self_play:
+        return stage.opponent
+    return (*stage.opponents, *_exploiter(curriculum), *league_members(algorithm, curriculum))
+
+
+def _priorities(curriculum, records: dict, opponent: tuple[str, ...]) -> list[float]:
+    league = curriculum.league
+    return [priority(records[name], league.priority_power, league.priority_floor)
+            for name in opponent]
+
+
+def league_weights(algorithm, curriculum, stage, opponent) -> tuple[float, ...] | None:
+    """Each member's matchmaking weight (rl/matchmaking.py) in `stage`, None where the stage's
+    opponents take plain turns."""
+    if not matched(curriculum, stage):
+        return None
+    return tuple(_priorities(curriculum, _records(algorithm), opponent))
+
+
+class LeagueCallback(RLlibCallback):
+    """After each iteration: the league games of the curriculum `curriculum` (a shipped name or
+    a file) into the matchmaking book and the gates, a filled slot or restarted exploiter onto
+    the env runners, and the result's `league` and `matchmaking` entries (module docstring).
+    It runs before the stage's callback (rl/stages.py), which then maps the new members."""
+
+    def __init__(self, curriculum: str):
+        super().__init__()
+        self.curriculum = load_curriculum(curriculum)
+
+    def _match(self, algorithm, runners: dict) -> None:
+        """The iteration's results per league member into the matchmaking book."""
+        results = {}
+        for name in self.curriculum.league_members():
+            games = count(runners, f"league_games_vs_{name}")
+            if games:
+                wins, losses = (count(runners, f"league_{key}_vs_{name}")
+                                for key in ("wins", "losses"))
+                results[name] = (wins, losses, games - wins - losses)
+        halflife = self.curriculum.league.priority_halflife
+        algorithm.learner_group.foreach_learner(
+            lambda learner: learner.module[MATCHMAKING_MODULE].add(results, halflife))
+
+    def _matchmaking(self, algorithm, opponent: tuple[str, ...]) -> dict:
+        """Each member's share of the coming games, win-rate estimate and decayed games."""
+        records = _records(algorithm)
+        weights = _priorities(self.curriculum, records, opponent)
+        return {name: {"share": weight / sum(weights), "win_rate": records[name].win_rate,
+                       "games": records[name].games}
+                for name, weight in zip(opponent, weights, strict=True)}
+
+    def _gate(self, algorithm, runners: dict, episodes: int) -> dict:
+        """The iteration's league games into the gate, and the exploiter's games against the
+        learner into its own; a filled slot goes to the env runners (and, under prioritized
+        matchmaking, starts a new record), and so does a restarted exploiter."""
+        league = self.curriculum.league
+        wins, games = count(runners, "league_wins"), count(runners, "league_games")
+        filled = on_learner(
+            algorithm, lambda learner: gate_step(learner, league, wins, games, episodes))
+        self._new_member(algorithm, filled)
+        entry = {}
+        if league.exploiter:  # its wins are the learner's losses against it
+            wins, games = (count(runners, f"league_{key}_vs_{EXPLOITER}")
+                           for key in ("losses", "games"))
+            joined = on_learner(algorithm, lambda learner: exploiter_step(
+                learner, league, wins, games, episodes))
+            self._new_member(algorithm, joined)
+            if joined:
+                push_modules(algorithm, [EXPLOITER])  # restarted from the learner
+            block_wins, block_games = on_learner(
+                algorithm, lambda learner: learner.module[MATCHMAKING_MODULE].exploiter.tolist())
+            entry["exploiter"] = {"filled": joined, "gate_wins": block_wins,
+                                  "gate_games": block_games}
+        book = _book(algorithm, league)
+        block = next_slot(book)
+        return {"snapshots": len(members(book)), "filled": filled, "gate_games": block.games,
+                "gate_win_rate": block.wins / block.games if block.games else float("nan"),
+                "members": list(members(book)), **entry}
+
+    def _new_member(self, algorithm, slot: str | None) -> None:
+        """A slot just filled: a new record under prioritized matchmaking, and its weights on
+        every env runner."""
+        if slot is None:
+            return
+        if self.curriculum.league.prioritized:
+            algorithm.learner_group.foreach_learner(
+                lambda learner: learner.module[MATCHMAKING_MODULE].forget(slot))
+        push_modules(algorithm, [slot])
+
+    def on_train_result(self, *, algorithm, result, **kwargs) -> None:
+        if self.curriculum.league is None:
+            return
+        runners = result[ENV_RUNNER_RESULTS]
+        episodes = count(runners, NUM_EPISODES_LIFETIME)
+        before = self.curriculum.stages[
+            self.curriculum.stage_at(episodes - count(runners, NUM_EPISODES))]
+        if matched(self.curriculum, before):
+            self._match(algorithm, runners)  # before the gate, which may restart a record
+        if before.self_play:
+            result["league"] = self._gate(algorithm, runners, episodes)
+        stage = self.curriculum.stages[self.curriculum.stage_at(episodes)]
+        if matched(self.curriculum, stage):
+            result["matchmaking"] = self._matchmaking(
+                algorithm, league_opponent(algorithm, self.curriculum, stage))

@@ -1,11 +1,11 @@
 """Carrying a run to another machine: stop it right after a checkpoint, then pack its folder.
 
-`pack_run`, with the run stopped, folds the iterations' results into a small `history.csv` per
-trial (the curve and summary columns), keeps only the newest whole checkpoint, makes it the one
-Tune resumes from (`tune_state`) and drops Tune's growing logs (progress.csv down to its header),
-so the folder (a few MB plus the stage checkpoints) can be committed, copied to a fresh clone
-anywhere and resumed there with `train --resume` (`training.py`): Tune restores a moved
-experiment, and every path the run needs is rebuilt from the curriculum on the new machine.
+`pack_run`, with the run stopped, folds each trial's results into a small `history.csv` (the
+curve and summary columns), keeps only the newest whole checkpoint of the run, and drops Tune's
+growing logs and Tune's pickled state (`TUNE_STATE`: a run resumes from its data, never from
+it), so the folder (a few MB plus the stage checkpoints) can be committed, copied to a fresh
+clone anywhere and resumed there with `train --resume` (`training.py`), which rebuilds every
+object and path the run needs from the curriculum on the new machine.
 `stop_run` stops a run training in another process with every iteration it finished in a
 checkpoint: it asks the run's driver through a file in the run folder (`STOP_REQUEST`).
 """
@@ -13,26 +13,28 @@ checkpoint: it asks the run's driver through a file in the run folder (`STOP_REQ
 from __future__ import annotations
 
 import json
-import math
 import os
 import shutil
 import signal
 import time
 from pathlib import Path
 
-from ray import tune
-
-from . import ray_session, tune_state
+from . import ray_session
 from .checkpoint_policy import (
     checkpoint_age,
     checkpoint_complete,
     checkpoint_iteration,
     trial_dirs,
 )
-from .history import HISTORY_FILE, Trial, number, read_trial, write_summary
-from .tune_state import STATE_PATTERNS
+from .curriculum import RUN_CURRICULUM_FILE
+from .history import HISTORY_FILE, read_trial, write_summary
 
 STOP_REQUEST = "stop_request"  # in the run folder: `stop_run` asks the driver to stop
+# What Tune pickles into a run folder, code paths and all; a packed run holds none of it.
+TUNE_STATE = ("experiment_state-*.json", "basic-variant-state-*.json", "tuner.pkl",
+              "*/params.pkl")
+# A trial's logs that its history.csv replaces once packed.
+TRIAL_LOGS = ("result.json", "progress.csv", "events.out.tfevents.*")
 
 
 def stop_run(out: Path, say=print, poll: float = 0.5, timeout: float = 600.0) -> Path:
@@ -120,54 +122,43 @@ def _taken_since(checkpoint: Path, start: float) -> bool:
         return False
 
 
-def pack_run(out: Path) -> dict:
+def has_run(out: Path) -> bool:
+    """Whether `out` holds a run: its curriculum note, or a trial folder."""
+    return (Path(out) / RUN_CURRICULUM_FILE).is_file() or bool(trial_dirs(out))
+
+
+def newest_checkpoint(out: Path) -> Path | None:
+    """The newest whole checkpoint of any trial of the run in `out` (by iteration), or None."""
+    newest = max(_checkpoints(Path(out).resolve()), key=checkpoint_age, default=None)
+    return newest if newest is not None and checkpoint_complete(newest) else None
+
+
+def pack_run(out: Path) -> Path | None:
     """Shrink the stopped run in `out` to what resuming and the report need (see above), after
     ending the Ray processes a killed run left (so its note, `ray_session.json`, goes too); safe
-    to repeat, refused while the run is training. The newest checkpoint (by iteration) is kept
-    and made the one Tune resumes from (`tune_state.register_only`). Returns what it kept:
-    {trial name: (newest checkpoint name, the name Tune's state had registered)}."""
-    out = Path(out).resolve()  # Tune takes a relative path for a URI without a scheme
-    if not tune.Tuner.can_restore(str(out)):
+    to repeat, refused while the run is training. Returns the checkpoint it kept, the newest
+    whole one (None if there is none)."""
+    out = Path(out).resolve()
+    if not has_run(out):
         raise ValueError(f"--pack: no run in {out}")
     try:  # a run still training is refused; what a killed one left running is ended
         ray_session.reap(out)
     except ValueError as exc:
         raise ValueError(f"--pack: {exc}") from None
-    newest_of, to_register = {}, {}
+    kept = newest_checkpoint(out)
     for trial in trial_dirs(out):
-        checkpoints = sorted(trial.glob("checkpoint_*"), key=checkpoint_age)
-        summary = read_trial(trial)
-        write_summary(summary, trial, HISTORY_FILE)
-        results = trial / "result.json"
-        rows = _results(results)
-        if rows:  # Tune reads the last result when it restores the trial
-            results.write_text(f"{rows[-1][0]}\n")
-        _keep_header(trial / "progress.csv")
-        for stale in [*checkpoints[:-1], *trial.glob("events.out.tfevents.*")]:
-            if stale.is_dir():
-                shutil.rmtree(stale)
-            elif stale.exists():
-                stale.unlink()
-        newest_of[trial.name] = checkpoints[-1] if checkpoints else None
-        if checkpoints:
-            to_register[trial.name] = (checkpoints[-1], _result_at(
-                rows, summary, checkpoint_iteration(checkpoints[-1])))
-    registered = tune_state.register_only(out, to_register)
-    for pattern in STATE_PATTERNS:
-        for stale in sorted(out.glob(pattern))[:-1]:  # one per start; Tune reads the newest
+        write_summary(read_trial(trial, whole_run=False), trial, HISTORY_FILE)
+        stale = [*(p for pattern in TRIAL_LOGS for p in trial.glob(pattern)),
+                 *(c for c in trial.glob("checkpoint_*") if c != kept)]
+        for path in stale:
+            if path.is_dir():
+                shutil.rmtree(path)
+            elif path.exists():
+                path.unlink()
+    for pattern in TUNE_STATE:
+        for stale in out.glob(pattern):
             stale.unlink()
-    return {name: (newest and newest.name, registered.get(name))
-            for name, newest in newest_of.items()}
-
-
-def _keep_header(progress: Path) -> None:
-    """Cut Tune's progress.csv to its header line: the rows live on in history.csv, and Tune's
-    CSV logger, which copies the file back from the run folder on resume, appends below it (a
-    deleted file made it warn "Remote file not found" on every resume)."""
-    if progress.is_file():
-        with open(progress, newline="") as f:
-            header = f.readline()
-        progress.write_text(header if header.endswith("\n") else "")
+    return kept
 
 
 def _results(path: Path) -> list[tuple[str, dict]]:
@@ -181,18 +172,3 @@ def _results(path: Path) -> list[tuple[str, dict]]:
         except json.JSONDecodeError:
             continue
     return parsed
-
-
-def _result_at(rows: list[tuple[str, dict]], summary: Trial, iteration: int) -> dict:
-    """The result of `iteration` (the newest such line of result.json), as Tune records beside a
-    checkpoint, its clock taken from the trial's summary rows (one clock over every restore,
-    rl/history.py). If no line survived (a pack repeated after the first cut result.json to
-    a later iteration's line, or a run killed before Tune copied its result files to the run
-    folder), the iteration and its clock alone: Tune's trainable restores its iteration counter
-    and clock from these metrics; from {} it would number the resumed iterations from 1 again
-    (and the history, reading that as a restore, drop every row) and restart the clock at 0."""
-    result = next((r for _, r in reversed(rows) if r.get("training_iteration") == iteration),
-                  {"training_iteration": iteration})
-    clock = next((number(row.get("time_total_s")) for row in reversed(summary.rows)
-                  if number(row.get("training_iteration")) == iteration), math.nan)
-    return {**result, "time_total_s": clock} if math.isfinite(clock) else result

@@ -1,17 +1,21 @@
 """One training run of a curriculum through Tune: checkpoints, TensorBoard logs, progress, resume.
 
-The run directory holds one Tune experiment: `<run>/<trial>/checkpoint_*` (ordinary RLlib
-checkpoints, the latest three), the trial's `result.json`, `progress.csv` and TensorBoard event
-files, and `<run>/stages/<n>-<name>/`, the checkpoint at the end of each finished stage. The run
-stops once the lifetime episode count reaches the curriculum's total. `resume` restores the
-experiment (`tune.Tuner.restore`): the trial continues from its last checkpoint, and since the
-stage follows from the restored lifetime episode count, stage and counters pick up where they
-were, also after a SIGKILL: before Tune restores, the run is packed (`packing.pack_run`), which
-makes the newest whole checkpoint on disk the one Tune resumes from, whatever its state file had
-caught up with. Tune saves its state and copies it with the trial's result files to the run
-folder every 10 s (`SNAPSHOT_PERIOD_S`), also in a resumed run, whose saved state would keep the
-period it first started with (`tune_state.set_snapshot_period`); what saving on every controller
-step costs is in docs/measurements.md.
+The run directory holds one Tune trial per start of the run, its legs: `<run>/<trial>/
+checkpoint_*` (ordinary RLlib checkpoints, the latest three), the trial's `result.json`,
+`progress.csv` and TensorBoard event files; `<run>/stages/<n>-<name>/`, the checkpoint at the
+end of each finished stage; and `curriculum.json`, the curriculum it trains on. The run stops
+once the lifetime episode count reaches the curriculum's total.
+
+A run is resumed from its data, never from pickled code: `resume` packs the run
+(`packing.pack_run`: the newest whole checkpoint on disk is kept, also after a SIGKILL), then
+starts a new Tune trial whose algorithm, built from the curriculum and the command's settings
+as a new run's is, loads that checkpoint's state when it is built (rl/stages.py). Since the stage
+follows from the restored lifetime episode count, stage, counters, league and iteration pick up
+where they were; the run's history reads its legs as one (rl/history.py). Nothing Tune pickled
+(its experiment state, `params.pkl`) is read again, so a run resumes after our modules moved,
+and with another number of env runners. Tune saves its state and copies the trial's result files
+to the run folder every 10 s (`SNAPSHOT_PERIOD_S`); what saving on every controller step costs is
+in docs/measurements.md.
 
 A run outlives the machine it ran on: `packing.py` stops it at a checkpoint and packs its folder
 for `--resume` anywhere.
@@ -19,7 +23,6 @@ for `--resume` anywhere.
 
 from __future__ import annotations
 
-import json
 import os
 import shutil
 import signal
@@ -33,8 +36,7 @@ from ray import tune
 from ray.tune.result import SHOULD_CHECKPOINT
 
 from ..util.errors import first_sentence
-from . import quiet, ray_session, tune_state
-from .checkpoint_policy import trial_dirs, unreadable
+from . import quiet, ray_session
 from .config import build_config, check_weights
 from .curriculum import (
     DEFAULT_CURRICULUM,
@@ -44,7 +46,7 @@ from .curriculum import (
     resume_curriculum,
 )
 from .names import LEARNER, LEARNER_THREADS_ENV
-from .packing import pack_run, take_stop_request
+from .packing import has_run, pack_run, take_stop_request
 from .settings import RunSettings
 
 STOP_KEY = "env_runners/num_episodes_lifetime"
@@ -216,54 +218,17 @@ class StageCheckpoints(FreshOnRestore):
 
 def check_run_dir(out: Path, resume: bool) -> None:
     """Refuse, before any work, an --out that cannot be used: a new run over an existing one,
-    or a resume without a run or with an unreadable experiment state. (Tune, given an empty state
-    file, logs the error and starts the whole experiment again; a killed run can leave one.)"""
-    out = Path(out).resolve()  # Tune takes a relative path for a URI without a scheme
+    or a resume without a run."""
+    out = Path(out).resolve()
     if out.exists() and not out.is_dir():
         raise ValueError(f"--out {out} is a file, not a run directory")
-    exists = tune.Tuner.can_restore(str(out))
-    if not resume:
-        if exists:
-            raise ValueError(f"{out} already holds a run; pass --resume or another --out")
-        return
-    if not exists:
+    if resume and not has_run(out):
         raise ValueError(f"--resume: no run to resume in {out}")
-    for pattern in tune_state.STATE_PATTERNS:
-        newest = max(out.glob(pattern), default=None)
-        problem = newest and unreadable(newest)
-        if problem:
-            raise ValueError(
-                f"--resume: {newest} is unreadable ({problem}); Tune would start the run over. "
-                f"Put back an intact copy (git checkout, for a run kept in git) or move the file "
-                f"aside to resume from the one before it")
+    if not resume and has_run(out):
+        raise ValueError(f"{out} already holds a run; pass --resume or another --out")
 
 
-def resumes_from_checkpoint(out: Path, resume: bool) -> bool:
-    """Whether a (re)start of the run in `out` loads a checkpoint, so that pi comes from it and
-    not from the imitation weights: a resume of a run whose trials all have one (Tune restarts a
-    trial without a checkpoint from scratch)."""
-    trials = trial_dirs(out)
-    return resume and bool(trials) and all(any(t.glob("checkpoint_*")) for t in trials)
-
-
-def kept_layouts(out: Path, settings: RunSettings) -> list[str]:
-    """On --resume, one line per trial whose number of remote env runners differs from the one
-    asked for: Tune restores a trial with the config it was started with, so that option shapes
-    new runs only (the learner's threads, outside the config, follow the command)."""
-    notes = []
-    for trial in trial_dirs(out) if settings.resume else []:
-        if not (trial / "params.json").is_file():  # killed before Tune copied it (trial_dirs)
-            continue
-        params = json.loads((trial / "params.json").read_text())
-        started = params.get("num_env_runners", 0)
-        if started != settings.num_env_runners:
-            notes.append(f"note: {trial.name} resumes as it started, with {started} env "
-                         f"runners (Tune restores a trial's config); --num-env-runners shapes "
-                         f"new runs")
-    return notes
-
-
-def start_run(settings: RunSettings, say=print) -> tuple[Curriculum, Path]:
+def start_run(settings: RunSettings, say=print) -> tuple[Curriculum, Path, Path | None]:
     """Everything a run checks before Ray starts, then Ray: the curriculum and the run directory
     (default runs/<curriculum name>), after ending what a SIGKILLed run in that directory left
     running (told to `say`), dropping a stop request no run took, and, to resume, packing it
@@ -278,17 +243,15 @@ def start_run(settings: RunSettings, say=print) -> tuple[Curriculum, Path]:
     check_run_dir(out, settings.resume)
     curriculum = (resume_curriculum(out, given) if settings.resume
                   else given or load_curriculum(DEFAULT_CURRICULUM))
-    for note in kept_layouts(out, settings):
-        say(note)
-    if not resumes_from_checkpoint(out, settings.resume):  # else pi and vf come from it
+    start = None
+    if settings.resume:
+        start = pack_run(out)
+        say(f"{out}: resuming from {start.parent.name}/{start.name}" if start else
+            f"{out}: no checkpoint to resume from; the run starts over")
+    if start is None:  # else pi and vf come from the checkpoint
         check_weights(settings.pi_weights or curriculum.pi_weights)
         if curriculum.vf_weights:
             check_weights(curriculum.vf_weights, part="vf")
-    if settings.resume:
-        for trial, (kept, registered) in pack_run(out).items():
-            if kept != registered:
-                say(f"{trial}: resuming from {kept}, the newest whole checkpoint (Tune's state "
-                    f"named {registered})")
     init_ray(settings.address, num_cpus=settings.num_cpus, torch_threads=settings.torch_threads)
     if settings.address is None:  # our own Ray: note it, for the next start to clean up after
         ray_session.record(out)
@@ -301,7 +264,7 @@ def start_run(settings: RunSettings, say=print) -> tuple[Curriculum, Path]:
     record_run_curriculum(out, curriculum)
     say(f"TensorBoard: tensorboard --logdir {out} (Tune's own hint below names a folder of the "
         f"Ray session under /tmp/ray, not the run's)")
-    return curriculum, out
+    return curriculum, out, start
 
 
 def check_cluster_fits(settings: RunSettings) -> None:
@@ -331,36 +294,30 @@ def cpus_per_env_runner(settings: RunSettings) -> float:
     return min(1.0, (settings.num_cpus - 1) / settings.num_env_runners)  # num_cpus >= 2 here
 
 
-def train(curriculum: Curriculum, out: Path, settings: RunSettings):
-    """Run (or resume, `settings.resume`) `curriculum` into the run directory `out`; Ray must be
-    initialised."""
+def train(curriculum: Curriculum, out: Path, settings: RunSettings,
+          start: Path | None = None):
+    """Run `curriculum` into the run directory `out` as a new Tune trial, from the checkpoint
+    `start` where a resumed run goes on (`start_run` finds it); Ray must be initialised."""
     out = Path(out).resolve()
-    resume = settings.resume
     os.environ.setdefault("TUNE_GLOBAL_CHECKPOINT_S", SNAPSHOT_PERIOD_S)
     config = build_config(curriculum, pi_weights=settings.pi_weights,
                           num_env_runners=settings.num_env_runners,
                           cpus_per_env_runner=cpus_per_env_runner(settings), seed=settings.seed,
-                          restoring=resumes_from_checkpoint(out, resume))
-    check_run_dir(out, resume)
-    if resume:  # Tune would keep the period the run first started with (tune_state.py)
-        tune_state.set_snapshot_period(out, os.environ["TUNE_GLOBAL_CHECKPOINT_S"])
-        tuner = tune.Tuner.restore(str(out), trainable=config.algo_class, param_space=config,
-                                   resume_unfinished=True, resume_errored=True)
-    else:
-        tuner = tune.Tuner(
-            config.algo_class,
-            param_space=config,
-            run_config=tune.RunConfig(
-                name=out.name,
-                storage_path=str(out.parent),
-                stop={STOP_KEY: curriculum.total_episodes},
-                checkpoint_config=tune.CheckpointConfig(
-                    checkpoint_frequency=curriculum.ppo.checkpoint_every,
-                    checkpoint_at_end=True, num_to_keep=3),
-                callbacks=[Progress(), StageCheckpoints(), StopOnRequest()],
-                verbose=0,
-            ),
-        )
+                          restore_from=start)
+    tuner = tune.Tuner(
+        config.algo_class,
+        param_space=config,
+        run_config=tune.RunConfig(
+            name=out.name,
+            storage_path=str(out.parent),
+            stop={STOP_KEY: curriculum.total_episodes},
+            checkpoint_config=tune.CheckpointConfig(
+                checkpoint_frequency=curriculum.ppo.checkpoint_every,
+                checkpoint_at_end=True, num_to_keep=3),
+            callbacks=[Progress(), StageCheckpoints(), StopOnRequest()],
+            verbose=0,
+        ),
+    )
     results = tuner.fit()
     result = results[0]
     if result.error:

@@ -143,7 +143,6 @@ def test_a_run_still_training_is_not_packed(tmp_path):
 
     run = tmp_path / "run"
     (run / "PPO_trial" / "checkpoint_000001").mkdir(parents=True)
-    (run / "tuner.pkl").write_bytes(b"")  # what Tune looks for
     note = {"session_dir": str(tmp_path / "session_x"), "driver_pid": os.getpid(),
             "driver_start": ray_session._start_time(os.getpid())}
     (run / "ray_session.json").write_text(json.dumps(note))
@@ -189,15 +188,15 @@ def test_train_checks_its_arguments_before_ray_starts(tmp_path, monkeypatch, cap
 
 
 def test_a_resume_without_a_checkpoint_needs_the_weights(tmp_path, monkeypatch, capsys):
-    """Tune restarts a trial that has no checkpoint from scratch: pi must come from the file."""
+    """A run with no checkpoint starts over: pi must come from the file."""
     from rllib_pommer.train import main
 
     started = _no_ray(monkeypatch)
     run = tmp_path / "run"
     (run / "PPO_pommerman_team_0").mkdir(parents=True)
     (run / "PPO_pommerman_team_0" / "params.json").write_text("{}")
-    monkeypatch.setattr("ray.tune.Tuner.can_restore", lambda path: True)
-    monkeypatch.setattr("rllib_pommer.rl.training.pack_run", lambda out: {})  # no Tune state
+    monkeypatch.setattr("rllib_pommer.rl.training.pack_run",  # the newest checkpoint, if any
+                        lambda out: next(iter(sorted(out.glob("*/checkpoint_*"))), None))
     with pytest.raises(SystemExit):
         main(["--curriculum", "smoke", "--out", str(run), "--resume",
               "--pi-weights", str(tmp_path / "absent.pt")])
@@ -261,9 +260,10 @@ def _on_a_cluster(monkeypatch, free_cpus: float):
     monkeypatch.setattr(training, "init_ray", lambda *args, **kwargs: None)
     monkeypatch.setattr(ray, "available_resources", lambda: {"CPU": free_cpus})
     monkeypatch.setattr(ray, "shutdown", lambda: shutdowns.append(1))
-    monkeypatch.setattr(training, "train", lambda curriculum, out, settings: handed.append(
-        settings) or type("Result", (), {"checkpoint": None, "path": str(out), "metrics": {
-            "curriculum": {"episodes": curriculum.total_episodes}}})())
+    monkeypatch.setattr(training, "train", lambda curriculum, out, settings, start=None:
+                        handed.append(settings) or type("Result", (), {
+                            "checkpoint": None, "path": str(out), "metrics": {
+                                "curriculum": {"episodes": curriculum.total_episodes}}})())
     return shutdowns, handed
 
 

@@ -77,11 +77,10 @@ def test_an_iteration_in_which_no_episode_ended_keeps_the_stage():
 
     from ray.rllib.utils.metrics import ENV_RUNNER_RESULTS, NUM_EPISODES, NUM_EPISODES_LIFETIME
 
-    from rllib_pommer.rl.callbacks import CurriculumCallback
+    from rllib_pommer.rl.stages import StageCallback
 
     algorithm = SimpleNamespace(env_runner_group=_Group(), learner_group=_Group())
     result = {ENV_RUNNER_RESULTS: {NUM_EPISODES_LIFETIME: 10_500, NUM_EPISODES: float("nan")}}
-    CurriculumCallback(load_curriculum("paper")).on_train_result(algorithm=algorithm,
-                                                                 result=result)
+    StageCallback("paper").on_train_result(algorithm=algorithm, result=result)
     assert result["curriculum"]["stage"] == 1 and result["curriculum"]["episodes"] == 10_500
     assert result["curriculum"]["ended_stage"] is None

@@ -5,7 +5,6 @@ run keeps the layout it started with, and says so."""
 
 from __future__ import annotations
 
-import json
 import subprocess
 import sys
 
@@ -16,7 +15,7 @@ from rllib_pommer.rl.config import build_config
 from rllib_pommer.rl.curriculum import load_curriculum
 from rllib_pommer.rl.names import LEARNER_THREADS_ENV
 from rllib_pommer.rl.settings import RunSettings
-from rllib_pommer.rl.training import cpus_per_env_runner, kept_layouts
+from rllib_pommer.rl.training import cpus_per_env_runner
 
 
 def test_our_own_ray_instance_shares_its_cpus_between_the_learner_and_the_runners():
@@ -30,17 +29,6 @@ def test_our_own_ray_instance_shares_its_cpus_between_the_learner_and_the_runner
         RunSettings(num_env_runners=1, num_cpus=1)
     assert RunSettings(num_cpus=1).num_env_runners == 0  # sampling in its process: fine
     assert RunSettings(num_env_runners=1, num_cpus=1, address="auto").num_cpus == 1  # a cluster
-
-
-def test_a_resumed_run_says_it_keeps_the_layout_it_started_with(tmp_path):
-    trial = tmp_path / "PPO_x"
-    trial.mkdir()
-    (trial / "params.json").write_text(json.dumps({"num_env_runners": 0}))
-    asked = RunSettings(resume=True, num_env_runners=2, torch_threads=2)
-    (note,) = kept_layouts(tmp_path, asked)
-    assert "PPO_x resumes as it started, with 0 env runners" in note
-    assert kept_layouts(tmp_path, RunSettings(resume=True, torch_threads=2)) == []
-    assert kept_layouts(tmp_path, RunSettings(num_env_runners=2)) == []  # not a resume
 
 
 def test_tune_can_place_the_two_runner_layout_on_two_cpus(pi_weights):

@@ -32,7 +32,7 @@ def trained(monkeypatch):
 
     handed = []
 
-    def train(curriculum, out, settings):
+    def train(curriculum, out, settings, start=None):
         handed.append(curriculum)
         return SimpleNamespace(checkpoint=None, path=str(out),
                                metrics={"curriculum": {"episodes": curriculum.total_episodes}})
@@ -40,16 +40,17 @@ def trained(monkeypatch):
     monkeypatch.setattr(training, "train", train)
     monkeypatch.setattr(training, "init_ray", lambda *args, **kwargs: None)
     monkeypatch.setattr(training.ray_session, "record", lambda out: None)
-    monkeypatch.setattr(training, "pack_run", lambda out: {})
+    monkeypatch.setattr(training, "pack_run", lambda out: None)
     monkeypatch.setattr(ray, "shutdown", lambda: None)
-    monkeypatch.setattr("ray.tune.Tuner.can_restore",
-                        lambda path: (Path(path) / "tuner.pkl").is_file())
     return handed
 
 
 def _started(run: Path) -> None:
-    """What Tune leaves that makes a folder a run to resume (`tuner.pkl`)."""
-    (run / "tuner.pkl").write_bytes(b"")
+    """What makes a folder a run to resume: a trial folder (Tune's params.json in it)."""
+    params = run / "PPO_pommerman_team_00000" / "params.json"
+    params.parent.mkdir(parents=True, exist_ok=True)
+    if not params.is_file():
+        params.write_text("{}")
 
 
 def _params_run(run: Path, name: str, path: str) -> None:

@@ -28,7 +28,7 @@ from rllib_pommer.rl.curriculum import load_curriculum
 from rllib_pommer.rl.league import MATCHMAKING_MODULE, Slot, members, next_slot
 from rllib_pommer.rl.matchmaking import Record
 
-from .test_resume import REPO, _interrupt, _results, _train, _wait_for
+from .test_resume import REPO, _interrupt, _newest_leg, _results, _train, _wait_for
 from .test_self_play import SELF_PLAY_SMOKE
 
 # Suicide opponents alone: the learner wins nearly every (10-step) game, so the first block fills
@@ -141,13 +141,14 @@ def test_a_league_survives_stop_pack_move_and_resume(tmp_path, pi_weights):
         process = subprocess.Popen(_command(moved, "--resume"), cwd=tmp_path,
                                    stdout=subprocess.DEVNULL, stderr=log,
                                    start_new_session=True)
-    trial = moved / checkpoint.parent.name
     try:
-        _wait_for(lambda: [c for c in trial.glob("checkpoint_*")
-                           if c.name != checkpoint.name and checkpoint_complete(c)], process,
-                  240, "a checkpoint after the resume")
+        _wait_for(lambda: [c for c in moved.glob("*/checkpoint_*")
+                           if c.parent.name != checkpoint.parent.name
+                           and checkpoint_complete(c)], process, 240,
+                  "a checkpoint after the resume")
     finally:
         _interrupt(process)
+    trial = _newest_leg(moved)  # the resume's own trial
     resumed = sorted((r for r in _results(moved)
                       if r["iterations_since_restore"] < r["training_iteration"]),
                      key=lambda r: r["training_iteration"])
