@@ -1,7 +1,8 @@
 """Remote agents over the 2018 competition's HTTP protocol: our arena plays the runner.
 
 A policy file of kind "http" says where the agents listen (see `rllib_pommer.serving` for the
-protocol):
+protocol); the kind is a plugin of the registry (`registry.KINDS`), so this module and `requests`
+load only when such an agent is first built:
 
     kind = "http"
     description = "Skynet's 2018 container"
@@ -40,7 +41,7 @@ import json
 import logging
 import weakref
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import requests
@@ -55,16 +56,14 @@ from ..game.constants import (
 )
 from ..game.observation import Observation
 from ..game.serialize import dump_observation, load_words
-
-if TYPE_CHECKING:
-    from .registry import PolicySpec
+from .registry import PolicySpec, register_kind
+from .speaker import SILENCE
 
 DEFAULT_HOST = "127.0.0.1"
 DEFAULT_TIMEOUT = 0.15  # the competition runner's wait for an action
 INIT_TIMEOUT = 10.0  # /init_agent may load a model; only /action is held to the game's pace
 ACTION_SPACE = "6"  # Discrete(6), JSON-encoded as the competition's runner sent it
 PARAMS = ("host", "port", "timeout")
-SILENCE = (0,) * RADIO_NUM_WORDS
 
 logger = logging.getLogger(__name__)
 
@@ -192,3 +191,6 @@ class HttpAgent:
 
 def _is_move(action: Any) -> bool:
     return isinstance(action, int) and not isinstance(action, bool) and 0 <= action < NUM_ACTIONS
+
+
+register_kind("http", HttpAgent.from_spec)

@@ -5,9 +5,10 @@ weights path for learned kinds). Data files rather than code keep the set of nam
 editable without touching the package. `KINDS` is the one table of kinds: how each builds its
 agent, which keys its files hold, and which fixed RLlib module plays it in a curriculum (the
 curriculum checker and `rl/fixed_modules.py` read it from here). Scripted kinds come from the
-catalogue of rules (`scripted.RULES`); kinds whose code lies above this layer (torch, Ray) name
-the module that registers their factory (`register_kind`), imported only when an agent of that
-kind is built, so names resolve and curricula check without torch or Ray.
+catalogue of rules (`scripted.RULES`); kinds whose code lies above this layer (torch, Ray) or
+needs a heavy library (the remote agent's `requests`) name the module that registers their
+factory (`register_kind`), imported only when an agent of that kind is built, so names resolve
+and curricula check without torch, Ray or `requests`.
 
 Names follow the paper's table: `X_jitter`, `X_action` and `X_jitter_action` are policy X under the
 Jitter Correction, the Action Filter, or both. The wrappers are always stacked in the order of
@@ -36,7 +37,6 @@ from ..util.shipped import FOLDERS, data_dir
 from ..util.toml_values import fits
 from .action_filter import ActionFilter
 from .base import Agent
-from .http_agent import HttpAgent
 from .jitter import JitterCorrection
 from .scripted import RULES
 from .search import SearchAgent
@@ -95,7 +95,8 @@ class Kind:
     """One kind of policy file (module docstring).
 
     build:  the factory of a fresh agent from the spec; None until `plugin` registers it.
-    plugin: the module that registers `build` (torch or Ray side), imported when first needed.
+    plugin: the module that registers `build` (torch, Ray or requests side), imported when first
+            needed.
     keys:   the keys its files may hold beyond kind and description; None: the factory checks.
     fixed:  the fixed RLlib module that plays it in a curriculum, "scripted" (the rule of
             `scripted.RULES`), "search" (`search.search_actions` at the file's effort) or "net"
@@ -114,7 +115,7 @@ def _scripted(agent: type) -> Factory:
 
 KINDS: dict[str, Kind] = {
     **{kind: Kind(_scripted(rule.agent), fixed="scripted") for kind, rule in RULES.items()},
-    "http": Kind(HttpAgent.from_spec, keys=None),  # http_agent.py checks its own keys
+    "http": Kind(None, "rllib_pommer.agents.http_agent", None),  # it checks its own keys
     "search": Kind(SearchAgent.from_spec, keys={"depth": (int, False), "horizon": (int, False),
                                                "recall": (int, False)}, fixed="search"),
     "learned": Kind(None, "rllib_pommer.imitation.learned",

@@ -17,16 +17,15 @@ reference's runner does.
 from __future__ import annotations
 
 import os
+import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from functools import partial
 
 import numpy as np
-import torch
 
 from ..agents.base import innermost
-from ..agents.http_agent import HttpAgent
-from ..agents.registry import make_agent
+from ..agents.registry import make_agent, resolve_policy
 from ..agents.speaker import as_passed, radio_act
 from ..game.blast import mark_blast
 from ..game.constants import RADIO_NUM_WORDS, Action, GameConfig, has_radio, has_teams, preset
@@ -46,7 +45,6 @@ from ..game.state import (
     B_ROW,
     M_BOMBS,
 )
-from ..imitation.learned import LearnedAgent
 from ..util.parallel import map_unordered
 from .records import GameRecord
 
@@ -111,15 +109,25 @@ def _killed_by_own_bomb(seat: int, cell: tuple[int, int], board: np.ndarray,
     return False
 
 
+def _loaded(module: str):
+    """The module `module` if this process has loaded it, else None. Learned agents come from
+    the registry's plugin kinds, whose modules (and torch) load when the first one is built: a
+    match without one never loads them."""
+    return sys.modules.get(module)
+
+
 def _prefetch_learned(players: list[list], obs, active: np.ndarray,
                       message: np.ndarray | None) -> None:
     """One forward pass per learned policy for all its active agents in the chunk, hearing
     `message` (N, 4, 2) in TeamRadio."""
+    learned = _loaded("rllib_pommer.imitation.learned")
+    if learned is None:  # no learned agent was built in this process
+        return
     groups: dict = {}
     for g, seats in enumerate(players):
         for s, agent in enumerate(seats):
             core = innermost(agent)
-            if active[g, s] and isinstance(core, LearnedAgent):
+            if active[g, s] and isinstance(core, learned.LearnedAgent):
                 groups.setdefault(id(core.policy), (core.policy, [], []))
                 groups[id(core.policy)][1].append(core)
                 groups[id(core.policy)][2].append((g, s))
@@ -164,7 +172,6 @@ def _play_chunk(spec: MatchSpec, games: Sequence[int],
                 replay_observations: bool | None = None) -> tuple[list, list]:
     """Play `games` in lockstep; return their records, and their replays unless
     `replay_observations` is None (with the per-agent observations if it is True)."""
-    torch_threads_for_workers()
     n = len(games)
     seeds = [game_seeds(spec.seed, g) for g in games]
     config = spec.config
@@ -177,6 +184,7 @@ def _play_chunk(spec: MatchSpec, games: Sequence[int],
         for seat, agent in enumerate(agents):
             agent.reset(seat, int(config.game_type), seeds[i][1][seat])
         players.append(agents)
+    torch_threads_for_workers()
     recorders = {}
     if replay_observations is not None:
         for i, g in enumerate(games):
@@ -234,16 +242,22 @@ def _agent_mix(spec: MatchSpec, game: int) -> str:
 
 
 def torch_threads_for_workers() -> None:
-    """One torch thread per process: the workers already fill the cores."""
-    torch.set_num_threads(1)
+    """One torch thread per process where the agents built have loaded torch (a learned
+    policy's): the workers already fill the cores. A scripted match loads no torch."""
+    torch = _loaded("torch")
+    if torch is not None:
+        torch.set_num_threads(1)
+
+
+REMOTE_KINDS = ("http",)  # policy kinds played by a remote agent (`agents/http_agent.py`)
 
 
 def _plays_remote_agents(spec: MatchSpec) -> bool:
     """A remote (HTTP) agent serves one seat of one game at a time, like a competition container.
 
     One seating holds both policies, so building its four agents also checks every name."""
-    players = _build_players(spec, SEATS_A[0])
-    return any(isinstance(innermost(agent), HttpAgent) for agent in players)
+    _build_players(spec, SEATS_A[0])
+    return any(resolve_policy(name).kind in REMOTE_KINDS for name in (spec.team, spec.vs))
 
 
 def play_match(spec: MatchSpec, workers: int | None = None,

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import re
+import subprocess
+import sys
 
 import pytest
 
@@ -76,6 +78,27 @@ def test_episode_switches_build_the_same_stack_as_the_names():
         registry.switched_on({"action": True})
     with pytest.raises(ValueError, match=r"unknown filter\(s\) \['action_filter'\]"):
         registry.with_filters(StaticAgent(), ["action_filter"])
+
+
+def test_the_registry_loads_requests_only_for_a_remote_agent():
+    """The http kind is a plugin: its module, and `requests`, load when one is first built."""
+    code = ("import sys\nimport rllib_pommer.agents.registry as registry\n"
+            "print('requests' in sys.modules, 'rllib_pommer.agents.http_agent' in sys.modules)\n"
+            "registry.make_agent('simple_action')\nprint('requests' in sys.modules)\n"
+            "registry.registered('http')\nprint('requests' in sys.modules)")
+    lines = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                           check=True).stdout.split()
+    assert lines == ["False", "False", "False", "True"]
+
+
+def test_a_remote_policy_file_builds_an_http_agent(tmp_path):
+    path = tmp_path / "remote.toml"
+    path.write_text('kind = "http"\ndescription = "a container"\nport = [10080, 10081]\n')
+    agent = make_agent(path)
+    assert type(agent).__name__ == "HttpAgent" and agent.ports == (10080, 10081)
+    path.write_text('kind = "http"\nport = 10080\nhots = "x"\n')
+    with pytest.raises(ValueError, match=r"unknown key\(s\) \['hots'\] for kind 'http'"):
+        make_agent(path)
 
 
 def test_each_call_builds_fresh_agents():

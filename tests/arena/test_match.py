@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import csv
 import json
+import subprocess
+import sys
 
 import pytest
 
@@ -23,6 +25,20 @@ def test_same_seed_same_records_whatever_the_workers():
     parallel = play_match(spec, workers=2)
     assert serial == parallel
     assert play_match(MatchSpec("simple", "random", 6, seed=6), workers=1) != serial
+
+
+def _heavy_after(code: str) -> list[str]:
+    """Which of torch and requests a fresh interpreter has loaded after running `code`."""
+    code += "\nimport sys; print([m for m in ('torch', 'requests') if m in sys.modules])"
+    return json.loads(subprocess.run([sys.executable, "-c", code], capture_output=True,
+                                     text=True, check=True).stdout.replace("'", '"'))
+
+
+def test_a_scripted_match_loads_no_torch_and_a_learned_one_does():
+    match = "from rllib_pommer.arena.match import MatchSpec, play_match\n"
+    assert _heavy_after(match + "play_match(MatchSpec('simple', 'static', 2), workers=1)") == []
+    assert _heavy_after(match + "play_match(MatchSpec('imitation', 'static', 1), workers=1)") \
+        == ["torch"]
 
 
 def test_seats_alternate_unless_fixed():
