@@ -26,8 +26,8 @@ import numpy as np
 import torch
 
 from rllib_pommer.imitation.learned import load_policy_net
-from rllib_pommer.rl.checkpoint_policy import load_checkpoint_net
 from rllib_pommer.rl.env import PommeEnv
+from rllib_pommer.runs.checkpoints import load_checkpoint_net
 
 RARE_LOGP = -10.0
 ADAM_STEP = 1e-4

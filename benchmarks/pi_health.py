@@ -25,7 +25,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from rllib_pommer.rl.history import find_trials, number, read_trial  # noqa: E402
+from rllib_pommer.runs.history import find_trials, number, read_trial  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 COLLAPSED = ("57c1c4d", "campaign/paper/PPO_pommerman_team_2991b_00000_0_2026-12-01_18-58-15/"

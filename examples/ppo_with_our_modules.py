@@ -35,9 +35,10 @@ from ray.rllib.algorithms.ppo import PPOConfig
 from ray.rllib.core.rl_module.multi_rl_module import MultiRLModuleSpec
 from ray.rllib.core.rl_module.rl_module import RLModuleSpec
 
+import rllib_pommer.rl.env  # noqa: F401  (registers the env)
 from rllib_pommer.agents.registry import resolve_policy
+from rllib_pommer.curriculum.names import ENV_NAME
 from rllib_pommer.game.constants import MAX_STEPS
-from rllib_pommer.rl.env import ENV_NAME
 from rllib_pommer.rl.fixed_modules import fixed_module_spec
 from rllib_pommer.rl.rl_module import PommerPPOModule
 

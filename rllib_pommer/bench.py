@@ -13,14 +13,14 @@ agents compares with the reference's figures (tests/reference/reference_speed.js
   SimpleAgent, after one warm-up game), at its default effort (`search`) and the cheaper one
   (`search_fast`), and the arena's games/s on one worker (`agents/speed.py`, `arena/match.py`);
 - `train`: the quick curriculum's PPO for a few iterations on the real env and on a zero-cost twin
-  with the same spaces; env steps/s of both and their ratio (`rl/speed.py`);
+  with the same spaces; env steps/s of both and their ratio (`launch/speed.py`);
 - `layout`: the quick curriculum's PPO on the real env sampled in the learner's process (0 env
   runners, 1 learner thread) and by 2 remote env runners with 2 learner threads; env steps/s of
-  each and their ratio (`rl/speed.py`; meaningful on an otherwise idle machine);
+  each and their ratio (`launch/speed.py`; meaningful on an otherwise idle machine);
 - `learn`: on a run's torch threads (one), the real RLlib PPO update (pi trainable, and frozen as
   in the value warm-up) and the real behaviour-cloning step, each beside its plain float32 NCHW
   torch baseline, this core's float32 FLOP bound, and the learner connector's seconds on one
-  iteration with and without its trained-agents-only head (`rl/speed.py`, `imitation/speed.py`).
+  iteration with and without its trained-agents-only head (`launch/speed.py`, `imitation/speed.py`).
 
 Three runs each for engine and agents; min/median/max are printed. Pin the process to one core
 (`taskset -c 0`) to compare per core with the reference.
@@ -118,21 +118,21 @@ def bench_search() -> dict:
 
 def bench_train() -> dict:
     """PPO env steps/s on the real env and on a zero-cost env with the same spaces, one run."""
-    from .rl.speed import train_speeds  # Ray and torch only for this target
+    from .launch.speed import train_speeds  # Ray and torch only for this target
 
     return train_speeds()
 
 
 def bench_layout() -> dict:
     """PPO env steps/s with 0 env runners and 1 learner thread beside 2 and 2, one run."""
-    from .rl.speed import layout_speeds  # Ray and torch only for this target
+    from .launch.speed import layout_speeds  # Ray and torch only for this target
 
     return layout_speeds()
 
 
 def bench_learn() -> dict:
     """Learner samples/s: RLlib PPO and BC, each beside its plain-torch baseline, and the bound."""
-    from .rl.speed import learner_speeds  # Ray and torch only for this target
+    from .launch.speed import learner_speeds  # Ray and torch only for this target
 
     return learner_speeds()
 

@@ -4,7 +4,7 @@ and tables, as DIR/report.md with PNGs beside it.
 Each input is classified by its content:
 
 - a directory: the Tune trial directories in or below it (progress.csv or result.json) give
-  Fig. 3, the training reward per curriculum phase (columns: rllib_pommer/rl/history.py);
+  Fig. 3, the training reward per curriculum phase (columns: rllib_pommer/runs/history.py);
 - a .jsonl, .jsonl.gz or .csv file of arena rows (`evaluate --records`, whose rows name their
   match; older files: a sidecar .json or the file name, see rllib_pommer/viz/matches.py) gives
   the win/loss/tie tables, with 95% intervals, in the layout of the paper's Tables 2 and 3
@@ -25,7 +25,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from .rl.history import exported_training, run_training
+from .runs.history import exported_training, run_training
 from .util.errors import report_error
 from .viz.model_card import write_model_card
 from .viz.report import SUMMARIES, classify, write_report

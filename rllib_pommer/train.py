@@ -20,8 +20,8 @@ small history.csv of the results), so it can be committed or copied and continue
 file and a plain state_dict, as `policies/imitation` is, with a model card (its Fig. 3 and stage
 table; `python -m rllib_pommer.report --card POLICY_DIR RECORDS...` adds its results tables).
 
-The options are the fields of `rl/settings.RunSettings`; PPO's own settings are the curriculum's
-(`rl/settings.PPOSettings`, overridable in its [ppo] table).
+The options are the fields of `curriculum/settings.RunSettings`; PPO's own settings are the
+curriculum's (`curriculum/settings.PPOSettings`, overridable in its [ppo] table).
 """
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from .rl.settings import RunSettings
+from .curriculum.settings import RunSettings
 from .util.cli_options import add_options, settings_from
 from .util.errors import report_error
 from .util.outputs import check_output_dir
@@ -75,7 +75,7 @@ def main(argv: list[str] | None = None) -> int:
     # Imports after parsing, so --help is instant.
     import ray
 
-    from .rl.training import RayStartError, start_run, train
+    from .launch.training import RayStartError, start_run, train
 
     try:  # everything that can be checked is checked before Ray starts
         settings = settings_from(RunSettings, args)
@@ -104,7 +104,7 @@ def main(argv: list[str] | None = None) -> int:
 def _stop(parser: argparse.ArgumentParser, out: Path | None) -> int:
     if out is None:
         parser.error("--stop needs --out RUN_DIR")
-    from .rl.packing import stop_run
+    from .launch.packing import stop_run
 
     try:
         stop_run(out)
@@ -116,7 +116,7 @@ def _stop(parser: argparse.ArgumentParser, out: Path | None) -> int:
 def _pack(parser: argparse.ArgumentParser, out: Path | None) -> int:
     if out is None:
         parser.error("--pack needs --out RUN_DIR")
-    from .rl.packing import pack_run
+    from .launch.packing import pack_run
 
     try:
         kept = pack_run(out)
@@ -133,8 +133,8 @@ def _pack(parser: argparse.ArgumentParser, out: Path | None) -> int:
 def _export(parser: argparse.ArgumentParser, out: Path | None, target: Path) -> int:
     if out is None:
         parser.error("--export needs --out RUN_DIR")
-    from .rl.checkpoint_policy import export_policy
-    from .rl.history import exported_training
+    from .runs.export import export_policy
+    from .runs.history import exported_training
     from .viz.model_card import write_model_card
 
     try:

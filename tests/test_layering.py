@@ -66,12 +66,13 @@ def test_curricula_are_checked_without_ray_or_torch(tmp_path):
     and one naming a learned policy (its kind's torch code is not needed to check the name)."""
     learned = tmp_path / "learned.toml"
     learned.write_text('[[stage]]\nname = "x"\nopponent = "imitation"\nepisodes = 5\n')
-    check = ("from rllib_pommer.rl.curriculum import curriculum_names, load_curriculum\n"
-             "from rllib_pommer.rl.mapping import SeatMapping\n"
+    check = ("from rllib_pommer.curriculum.curriculum import curriculum_names, load_curriculum\n"
+             "from rllib_pommer.curriculum.mapping import SeatMapping\n"
              f"loaded = [load_curriculum(n) for n in curriculum_names() + [{str(learned)!r}]]\n"
              "assert loaded[-1].stages[0].opponent == 'imitation' and len(loaded) > 3\n"
              "SeatMapping(0, 'suicide', 'simple')")
-    modules = ["rllib_pommer.rl.names", "rllib_pommer.rl.curriculum", "rllib_pommer.rl.mapping"]
+    modules = ["rllib_pommer.curriculum.names", "rllib_pommer.curriculum.curriculum",
+               "rllib_pommer.curriculum.mapping"]
     assert _loaded(modules, ("ray", "torch", "gymnasium"), check) == ""
 
 
@@ -237,7 +238,7 @@ def _section(doc: Path, heading: str) -> str:
 
 def load_table(doc: Path) -> list[tuple[list[str], dict[str, bool]]]:
     """The rows of the table under `LOAD_HEADING`: the modules each names (`game/` a package,
-    `rl/names` a module) and, per heavy package of the header, whether they may load it."""
+    `curriculum/names` a module) and, per heavy package of the header, whether they may load it."""
     lines = [line for line in _section(doc, LOAD_HEADING).splitlines() if line.startswith("|")]
     heavy = [cell.strip().lower() for cell in lines[0].strip("|").split("|")[1:]]
     rows = []

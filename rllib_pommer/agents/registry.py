@@ -121,7 +121,7 @@ KINDS: dict[str, Kind] = {
     "learned": Kind(None, "rllib_pommer.imitation.learned",
                     {"weights": (str, True), "greedy": (bool, False),
                      "temperature": (float, False)}, "net"),
-    "rllib_checkpoint": Kind(None, "rllib_pommer.rl.checkpoint_policy",
+    "rllib_checkpoint": Kind(None, "rllib_pommer.runs.checkpoints",
                              {"checkpoint": (str, True), "greedy": (bool, False),
                               "temperature": (float, False), "module": (str, False)}, "net"),
 }

@@ -10,7 +10,7 @@ alike: below 1 sharpens the distribution toward the greedy action, above 1 flatt
 frozen opponents read their files here too (`load_learned`), so they act as in the arena.
 
 Both kinds of learned policy are played here: "learned" (a state_dict file) and, registered by
-`rl/checkpoint_policy.py`, "rllib_checkpoint" (a PPO run's learner). Each kind registers the key
+`runs/checkpoints.py`, "rllib_checkpoint" (a PPO run's learner). Each kind registers the key
 naming its path and the loader of its network (`register_learned_kind`); the path is resolved
 against the policy file (`PolicySpec.file`), and one network is loaded per (kind, path, greedy,
 temperature) (and the file's other keys, such as a checkpoint's `module`) in a process,

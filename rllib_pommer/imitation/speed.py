@@ -5,7 +5,7 @@ The measures behind `python -m rllib_pommer.bench learn` that need torch but not
 * `plain_ppo_samples_per_s`: PPO's update as plain eager float32 NCHW torch, the network as it
   stood before any speed work: pi and a separate vf (`PommerNet`), a clipped surrogate plus value
   loss, Adam, gradient clip, with the minibatch, clip, lr and gradient clip it is given (the
-  caller, `rl/speed.py`, gives the real learner's `PPOSettings`). The baseline the RLlib learner
+  caller, `launch/speed.py`, gives the real learner's `PPOSettings`). The baseline the RLlib learner
   is compared to.
 * `bc_samples_per_s`: the real behaviour-cloning step (`bc.train_step` with `BCConfig`'s speed
   settings), beside `plain_bc_samples_per_s`, the same step with those settings off.
@@ -42,7 +42,7 @@ COUNTED_ROWS = 16  # a batch to count FLOPs on: per sample, they do not depend o
 
 
 class PPOUpdate(Protocol):
-    """The PPO settings the baseline update uses (`rl/settings.PPOSettings` has them)."""
+    """The PPO settings the baseline update uses (`curriculum/settings.PPOSettings` has them)."""
 
     minibatch_size: int
     clip_param: float

@@ -41,34 +41,25 @@ What each choice was measured to gain: docs/measurements.md.
 from __future__ import annotations
 
 from functools import partial
-from math import inf
 from pathlib import Path
 
 from ray.rllib.algorithms.ppo import PPOConfig
 from ray.rllib.core.rl_module.multi_rl_module import MultiRLModuleSpec
 from ray.rllib.core.rl_module.rl_module import RLModuleSpec
 
+from ..curriculum.curriculum import Curriculum, curriculum_ref
+from ..curriculum.mapping import SeatMapping
+from ..curriculum.names import ENV_NAME, EXPLOITER, LEARNER
 from ..imitation.learned import load_policy_net
-from .checkpoint_policy import NET_OUTPUTS
+from ..runs.checkpoints import NET_OUTPUTS
+from . import env as _env  # noqa: F401  (registers ENV_NAME with Tune)
 from .connectors import learner_filters
-from .curriculum import Curriculum, curriculum_ref
-from .env import ENV_NAME
 from .fixed_modules import fixed_module_spec
 from .league import LeagueCallback, snapshot_specs
 from .learner import DUAL_CLIP_KEY, PommerPPOLearner
-from .mapping import SeatMapping
-from .names import EXPLOITER
 from .outcomes import OutcomeMetrics
-from .rl_module import LEARNER, PommerPPOModule
-from .settings import PPOSettings
+from .rl_module import PommerPPOModule
 from .stages import StageCallback
-
-
-def _dual_clip(ppo: PPOSettings) -> dict:
-    """The learner's dual-clip bound, only where there is one: Tune resumes a run only with the
-    config keys it started with, and `learner_config_dict/dual_clip` would be a new one."""
-    return {"learner_config_dict": {DUAL_CLIP_KEY: ppo.dual_clip}} if ppo.dual_clip < inf else {}
-
 
 # what each of the learner's weights files is, and where it comes from, for check_weights' error
 WEIGHTS_HINTS = {
@@ -144,7 +135,8 @@ def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None
             minibatch_size=ppo.minibatch_size, lr=ppo.lr, gamma=ppo.gamma, lambda_=ppo.lambda_,
             num_epochs=ppo.num_epochs, train_batch_size_per_learner=ppo.train_batch_size,
             vf_loss_coeff=ppo.vf_loss_coeff, use_kl_loss=ppo.use_kl_loss,
-            grad_clip=ppo.grad_clip, **_dual_clip(ppo))
+            grad_clip=ppo.grad_clip,
+            learner_config_dict={DUAL_CLIP_KEY: ppo.dual_clip})  # inf: PPO's own loss
         .learners(learner_class=PommerPPOLearner)
         .callbacks([partial(LeagueCallback, curriculum_ref(curriculum)),  # the gate first
                     partial(StageCallback, curriculum_ref(curriculum),

@@ -33,9 +33,9 @@ from ray.rllib.connectors.connector_v2 import ConnectorV2
 from ray.rllib.core.columns import Columns
 
 from ..agents.registry import FILTER_SWITCHES, resolve_policy, switched_on, with_filters
+from ..curriculum.names import LEARNER
 from ..game.constants import TEAM_PRESET
 from ..game.raw_codec import unpack_raw
-from .names import LEARNER
 
 FILTERS_KEY = "learner_filters"
 FIXED_FILTERS_KEY = "fixed_filters"

@@ -7,9 +7,7 @@ they earn); this module adds RLlib's base class and the registration. The traini
 default "dict" observation, so any policy can sit in any seat;
 `env_config={"observation": "planes_last"}` gives the planes alone as a Box, for RLlib's default
 model; `env_config={"game": "radio"}` plays TeamRadio ([move, word, word] actions, the teammate's
-words in every observation; a curriculum's `game = "radio"` sets it). The raw codec
-(`game/raw_codec.py`) and the run's names (`names.py`) stay importable from here, where older
-code and notebooks import them.
+words in every observation; a curriculum's `game = "radio"` sets it).
 """
 
 from __future__ import annotations
@@ -17,13 +15,8 @@ from __future__ import annotations
 from ray.rllib.env.multi_agent_env import MultiAgentEnv
 from ray.tune.registry import register_env
 
-from ..envs.team import ACTION_SPACE, OBSERVATION_SPACE, MultiAgentTeam, agent_observations
-from ..game.raw_codec import RAW_SIZE, pack_raw, unpack_raw
-from ..game.rewards import REWARD_MODES
-from .names import ENV_NAME
-
-__all__ = ["ACTION_SPACE", "ENV_NAME", "OBSERVATION_SPACE", "RAW_SIZE", "REWARD_MODES",
-           "PommeEnv", "agent_observations", "pack_raw", "unpack_raw"]
+from ..curriculum.names import ENV_NAME
+from ..envs.team import MultiAgentTeam
 
 
 class PommeEnv(MultiAgentTeam, MultiAgentEnv):

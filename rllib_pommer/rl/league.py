@@ -18,11 +18,11 @@ league's members, their weights and the gate survive `--resume`, `--pack` and a 
 clone without any file of its own; the callback keeps no state and reads the book from the
 learner's modules whenever it needs it.
 
-Prioritized matchmaking (rl/matchmaking.py) keeps its book the same way: `MatchmakingModule`, a
-module that never plays, holds the learner's decayed wins, losses and ties against every league
-member (`Curriculum.league_members`); it exists only in a curriculum that asks for prioritized
-matchmaking or an exploiter, so runs started before it restore unchanged. A slot filled with a
-new snapshot starts a new record.
+Prioritized matchmaking (curriculum/matchmaking.py) keeps its book the same way:
+`MatchmakingModule`, a module that never plays, holds the learner's decayed wins, losses and ties
+against every league member (`Curriculum.league_members`); it exists only in a curriculum that asks
+for prioritized matchmaking or an exploiter, so runs started before it restore unchanged. A slot
+filled with a new snapshot starts a new record.
 
 An exploiter (AlphaStar's main exploiter) is a second trained module, `exploiter`, built like the
 learner from the same weights, that plays the learner and no one else: it is a member of the
@@ -32,15 +32,14 @@ won at `exploiter_gate_win` or more copies its pi into the next snapshot slot, w
 the learner's league as a frozen member, and the exploiter starts again from the learner's pi
 and vf as they are then, with fresh optimizer moments, to look for the next weakness.
 
-`LeagueCallback` runs the league after each iteration: the learner's league games
-(rl/outcomes.py counts them per member, summed over the iteration) go into the gate, which may
-fill the next slot from the learner's pi; the new member's weights go to every env runner, and
-the stage's callback (rl/stages.py) maps it at once. Under prioritized matchmaking the games go
-into the book first, the league's weights follow from it (rl/matchmaking.py) and reach every env
-runner's mapping in place. The result's `league` entry says how many snapshots play and where
-the gate's block stands (with an `exploiter` entry: its block and the slot it filled), and its
-`matchmaking` entry gives each member's share of the coming games, estimated win rate and
-decayed games.
+`LeagueCallback` runs the league after each iteration: the learner's league games (rl/outcomes.py
+counts them per member, summed over the iteration) go into the gate, which may fill the next slot
+from the learner's pi; the new member's weights go to every env runner, and the stage's callback
+(rl/stages.py) maps it at once. Under prioritized matchmaking the games go into the book first, the
+league's weights follow from it (curriculum/matchmaking.py) and reach every env runner's mapping in
+place. The result's `league` entry says how many snapshots play and where the gate's block stands
+(with an `exploiter` entry: its block and the slot it filled), and its `matchmaking` entry gives
+each member's share of the coming games, estimated win rate and decayed games.
 """
 
 from __future__ import annotations
@@ -55,11 +54,11 @@ from ray.rllib.core.rl_module.rl_module import RLModule, RLModuleSpec
 from ray.rllib.core.rl_module.torch import TorchRLModule
 from ray.rllib.utils.metrics import ENV_RUNNER_RESULTS, NUM_EPISODES, NUM_EPISODES_LIFETIME
 
+from ..curriculum.curriculum import load_curriculum
+from ..curriculum.matchmaking import Record, priority
+from ..curriculum.names import EXPLOITER, LEARNER
+from ..curriculum.settings import LeagueSettings
 from ..imitation.network import PommerNet
-from .curriculum import load_curriculum
-from .matchmaking import Record, priority
-from .names import EXPLOITER, LEARNER
-from .settings import LeagueSettings
 
 MATCHMAKING_MODULE = "matchmaking"
 
@@ -284,8 +283,8 @@ def _priorities(curriculum, records: dict, opponent: tuple[str, ...]) -> list[fl
 
 
 def league_weights(algorithm, curriculum, stage, opponent) -> tuple[float, ...] | None:
-    """Each member's matchmaking weight (rl/matchmaking.py) in `stage`, None where the stage's
-    opponents take plain turns."""
+    """Each member's matchmaking weight (curriculum/matchmaking.py) in `stage`, None where
+    the stage's opponents take plain turns."""
     if not matched(curriculum, stage):
         return None
     return tuple(_priorities(curriculum, _records(algorithm), opponent))

@@ -46,9 +46,8 @@ from ray.rllib.algorithms.ppo.torch.ppo_torch_learner import PPOTorchLearner
 from ray.rllib.core.columns import Columns
 from ray.rllib.evaluation.postprocessing import Postprocessing
 
+from ..curriculum.names import LEARNER, LEARNER_THREADS_ENV
 from ..game.constants import NUM_ACTIONS
-from .names import LEARNER_THREADS_ENV
-from .rl_module import LEARNER
 from .trained_agents import TrainedAgentsOnly
 
 DUAL_CLIP_KEY = "dual_clip"  # in the config's learner_config_dict

@@ -14,10 +14,10 @@ from __future__ import annotations
 
 from ray.rllib.callbacks.callbacks import RLlibCallback
 
+from ..curriculum.names import LEARNER
 from ..game.constants import Action
 from ..game.kills import deaths_by_cause, kills_of_team
 from .connectors import FILTERS_KEY, move_of
-from .names import LEARNER
 
 
 def learner_outcome(chunks) -> dict | None:

@@ -52,7 +52,6 @@ from ray.rllib.core.rl_module.torch import TorchRLModule
 
 from ..imitation.learned import load_policy_net
 from ..imitation.network import build_net
-from .names import LEARNER  # noqa: F401  (its module id, long imported from here)
 
 
 class PommerPPOModule(TorchRLModule, ValueFunctionAPI):

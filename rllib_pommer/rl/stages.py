@@ -31,10 +31,10 @@ from ray.rllib.callbacks.callbacks import RLlibCallback
 from ray.rllib.utils.metrics import ENV_RUNNER_RESULTS, NUM_EPISODES, NUM_EPISODES_LIFETIME
 from ray.tune.result import SHOULD_CHECKPOINT
 
-from .curriculum import load_curriculum
+from ..curriculum.curriculum import load_curriculum
+from ..curriculum.mapping import SeatMapping
+from ..curriculum.names import EXPLOITER, LEARNER
 from .league import count, league_members, league_opponent, league_weights, push_modules
-from .mapping import SeatMapping
-from .names import EXPLOITER, LEARNER
 
 
 def _push_stage(env_runner, mapping: SeatMapping, env_settings: dict) -> None:

@@ -1,6 +1,6 @@
 """Command-line options generated from a settings dataclass, so that each setting's name, type
 and default are written once, in the dataclass (`imitation/bc.BCConfig` for `imitate`,
-`rl/settings.RunSettings` for `train`), and the job adds only their help texts."""
+`curriculum/settings.RunSettings` for `train`), and the job adds only their help texts."""
 
 from __future__ import annotations
 

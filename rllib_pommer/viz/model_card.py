@@ -2,9 +2,9 @@
 table by `report --card`.
 
 The card is drawn from what the job hands it, all read from the policy folder by
-`rl/history.exported_training`, so it can be redrawn after the run has moved on or is gone:
+`runs/history.exported_training`, so it can be redrawn after the run has moved on or is gone:
 
-- the source (`source.json`, written by `rl/checkpoint_policy.export_policy`): the run, trial and
+- the source (`source.json`, written by `runs/export.export_policy`): the run, trial and
   checkpoint it came from, the checkpoint's iteration, the curriculum (name, description, every
   stage), the commit it was exported at and the commits that packed the run; optionally
   `chosen`, a person's reason for shipping this checkpoint rather than the run's end (say, the
@@ -47,7 +47,7 @@ def _schedule(curriculum: dict) -> str:
 
 
 def _start_lines(source: dict, games: int) -> list[str]:
-    """Where pi began, where `checkpoint_policy.starting_policy` could prove it, and the games
+    """Where pi began, where `runs/export.starting_policy` could prove it, and the games
     counted from the clone its lineage starts at (`history.lineage`)."""
     if not source.get("pi_start"):
         return []

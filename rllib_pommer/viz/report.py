@@ -1,6 +1,6 @@
 """The report of `python -m rllib_pommer.report`: inputs classified by what they hold, then the
 paper's figures and tables drawn from them into one folder (report.md and PNGs). Runs come as
-their training figures, computed by the job with `rl/history.py` (viz/ reads no run history)."""
+their training figures, computed by the job with `runs/history.py` (viz/ reads no run history)."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """What the training figures draw (Fig. 3, the stage table, a model card's training): plain data
-that `rl/history.py` computes from a run's history, so viz/ draws runs without reading their
+that `runs/history.py` computes from a run's history, so viz/ draws runs without reading their
 files.
 
 A curve's point is the mean return over the last `WINDOW` episodes up to an iteration, restarted

@@ -13,7 +13,7 @@ from rllib_pommer.data.dataset import open_dataset
 from rllib_pommer.game.constants import START_POSITIONS, Action
 from rllib_pommer.imitation.learned import greedy_actor
 from rllib_pommer.imitation.network import PommerNet
-from rllib_pommer.rl.checkpoint_policy import MODULE_STATE
+from rllib_pommer.runs.checkpoints import MODULE_STATE
 
 DRAWS = 8
 

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import torch
 
+from rllib_pommer.curriculum.settings import PPOSettings
 from rllib_pommer.imitation import speed
 from rllib_pommer.imitation.network import PommerNet
-from rllib_pommer.rl.settings import PPOSettings
 
 
 def _forward_macs(num_outputs: int) -> int:

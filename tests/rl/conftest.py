@@ -63,7 +63,7 @@ def train_curriculum(algo, curriculum) -> list[dict]:
     """Train `algo` (built from `curriculum`) until the curriculum's episodes are played; per
     iteration: the stage in force when it began, whether the learner's pi and vf moved, and
     RLlib's result."""
-    from rllib_pommer.rl.rl_module import LEARNER
+    from rllib_pommer.curriculum.names import LEARNER
 
     learner = algo.learner_group._learner.module[LEARNER]
     iterations, stage = [], 0
@@ -81,9 +81,9 @@ def smoke_run(name: str, pi_weights, folder: Path) -> dict:
     """The curriculum `name` trained in-process on the echo env to its end: the learner's
     start (pi weights, radio or not, action space), per-iteration results, 300 sampled steps,
     a checkpoint in `folder`, the trained pi and vf, and the stage each mapping ended at."""
+    from rllib_pommer.curriculum.curriculum import load_curriculum
+    from rllib_pommer.curriculum.names import LEARNER
     from rllib_pommer.rl.config import build_config
-    from rllib_pommer.rl.curriculum import load_curriculum
-    from rllib_pommer.rl.rl_module import LEARNER
 
     curriculum = load_curriculum(name)
     config = build_config(curriculum, pi_weights=pi_weights, env=ECHO_ENV)
@@ -103,7 +103,7 @@ def smoke_run(name: str, pi_weights, folder: Path) -> dict:
 
 def learner_episodes(episodes) -> list:
     """The learner's non-empty single-agent episodes in sampled multi-agent episodes."""
-    from rllib_pommer.rl.rl_module import LEARNER
+    from rllib_pommer.curriculum.names import LEARNER
 
     return [single for episode in episodes for single in episode.agent_episodes.values()
             if single.module_id == LEARNER and len(single)]

@@ -13,11 +13,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rllib_pommer.rl.checkpoint_policy import MODULE_STATE, load_checkpoint_net
+from rllib_pommer.curriculum.curriculum import load_curriculum
+from rllib_pommer.launch.packing import pack_run, stop_run
+from rllib_pommer.launch.training import check_run_dir, init_ray
 from rllib_pommer.rl.config import build_config
-from rllib_pommer.rl.curriculum import load_curriculum
-from rllib_pommer.rl.packing import pack_run, stop_run
-from rllib_pommer.rl.training import check_run_dir, init_ray
+from rllib_pommer.runs.checkpoints import MODULE_STATE, load_checkpoint_net
 
 STAGE = '[[stage]]\nname = "a"\nopponent = "static"\nepisodes = 5\n'
 
@@ -139,7 +139,7 @@ def test_run_folders_are_checked_by_relative_path_too(tmp_path, monkeypatch):
 
 def test_a_run_still_training_is_not_packed(tmp_path):
     """Its driver (here: this process) is alive: pack touches nothing."""
-    from rllib_pommer.rl import ray_session
+    from rllib_pommer.launch import ray_session
 
     run = tmp_path / "run"
     (run / "PPO_trial" / "checkpoint_000001").mkdir(parents=True)
@@ -195,7 +195,7 @@ def test_a_resume_without_a_checkpoint_needs_the_weights(tmp_path, monkeypatch, 
     run = tmp_path / "run"
     (run / "PPO_pommerman_team_0").mkdir(parents=True)
     (run / "PPO_pommerman_team_0" / "params.json").write_text("{}")
-    monkeypatch.setattr("rllib_pommer.rl.training.pack_run",  # the newest checkpoint, if any
+    monkeypatch.setattr("rllib_pommer.launch.training.pack_run",  # the newest checkpoint, if any
                         lambda out: next(iter(sorted(out.glob("*/checkpoint_*"))), None))
     with pytest.raises(SystemExit):
         main(["--curriculum", "smoke", "--out", str(run), "--resume",
@@ -233,8 +233,8 @@ def test_vf_weights_of_the_wrong_shape_are_refused_before_ray(tmp_path, monkeypa
     before, as pi_weights is."""
     import torch
 
+    from rllib_pommer.curriculum.curriculum import curriculum_dir
     from rllib_pommer.imitation.network import PommerNet
-    from rllib_pommer.rl.curriculum import curriculum_dir
     from rllib_pommer.train import main
 
     started = _no_ray(monkeypatch)
@@ -254,7 +254,7 @@ def _on_a_cluster(monkeypatch, free_cpus: float):
     list of shutdowns and the curricula training was handed."""
     import ray
 
-    from rllib_pommer.rl import training
+    from rllib_pommer.launch import training
 
     shutdowns, handed = [], []
     monkeypatch.setattr(training, "init_ray", lambda *args, **kwargs: None)
@@ -289,8 +289,8 @@ def test_a_cluster_too_small_for_the_runners_is_said_up_front(tmp_path, monkeypa
 
 def test_the_cluster_check_reads_what_ray_has_free(ray_session):
     """The same check against a real Ray of 2 CPUs (the tests' own), joined as a cluster."""
-    from rllib_pommer.rl.settings import RunSettings
-    from rllib_pommer.rl.training import check_cluster_fits
+    from rllib_pommer.curriculum.settings import RunSettings
+    from rllib_pommer.launch.training import check_cluster_fits
 
     check_cluster_fits(RunSettings(address="auto", num_env_runners=1))
     with pytest.raises(ValueError, match="has 2 free CPUs; the run asks for 3"):

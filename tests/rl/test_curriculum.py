@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
+from rllib_pommer.curriculum.curriculum import curriculum_names, load_curriculum
 from rllib_pommer.game.constants import TEAM_PRESET
-from rllib_pommer.rl.curriculum import curriculum_names, load_curriculum
 
 from ..conftest import REPO_ROOT
 

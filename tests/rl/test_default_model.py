@@ -9,7 +9,8 @@ from ray.rllib.algorithms.ppo import PPOConfig
 from ray.rllib.algorithms.ppo.torch.default_ppo_torch_rl_module import DefaultPPOTorchRLModule
 from ray.rllib.core.rl_module.default_model_config import DefaultModelConfig
 
-from rllib_pommer.rl.env import ENV_NAME, PommeEnv
+from rllib_pommer.curriculum.names import ENV_NAME
+from rllib_pommer.rl.env import PommeEnv
 
 
 def _config(observation: str) -> PPOConfig:

@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 from ray.rllib.utils.pre_checks.env import check_multiagent_environments
 
+from rllib_pommer.envs.multi_agent import PommeParallelEnv
 from rllib_pommer.rl.env import PommeEnv
-from rllib_pommer.rl.pettingzoo_env import PommeParallelEnv
 
 
 def _play(env, seed, steps=10_000):

@@ -25,16 +25,16 @@ from rllib_pommer.game.engine import Games
 from rllib_pommer.imitation.learned import greedy_actor
 from rllib_pommer.imitation.network import PommerNet
 from rllib_pommer.report import main as report
-from rllib_pommer.rl.checkpoint_policy import (
+from rllib_pommer.runs.checkpoints import (
     ALGORITHM_STATE,
     MODULE_STATE,
     checkpoint_complete,
     checkpoint_iteration,
     latest_checkpoint,
     load_checkpoint_net,
-    packed_commits,
 )
-from rllib_pommer.rl.history import (
+from rllib_pommer.runs.export import packed_commits
+from rllib_pommer.runs.history import (
     HISTORY_FILE,
     POLICY_HISTORY_DIR,
     exported_training,

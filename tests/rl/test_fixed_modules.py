@@ -11,15 +11,11 @@ from ray.rllib.core.columns import Columns
 from rllib_pommer.agents.scripted import RULES
 from rllib_pommer.agents.simple import new_memory, simple_actions
 from rllib_pommer.arena.match import MatchSpec, record_games, seats_of_team_a
+from rllib_pommer.envs.team import ACTION_SPACE, OBSERVATION_SPACE, agent_observations
+from rllib_pommer.game.raw_codec import unpack_raw
 from rllib_pommer.game.seeding import game_seeds
 from rllib_pommer.imitation.network import PommerNet
-from rllib_pommer.rl.env import (
-    ACTION_SPACE,
-    OBSERVATION_SPACE,
-    PommeEnv,
-    agent_observations,
-    unpack_raw,
-)
+from rllib_pommer.rl.env import PommeEnv
 from rllib_pommer.rl.fixed_modules import (
     FrozenNetModule,
     ScriptedModule,

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rllib_pommer.rl.history import (
+from rllib_pommer.runs.history import (
     Origin,
     exported_training,
     league_curves,
@@ -356,7 +356,7 @@ def test_a_resumed_run_reads_its_legs_as_one(tmp_path):
     """Each --resume starts a new Tune trial from the newest checkpoint: the run's history is
     its legs in the order Tune's folder names say they started (not their ids), the later leg's
     rows replacing the iterations it ran again, on one clock; the report finds one run."""
-    from rllib_pommer.rl.history import find_trials, legs, read_trial
+    from rllib_pommer.runs.history import find_trials, legs, read_trial
 
     def leg(name, iterations, clock):
         trial = tmp_path / "run" / name

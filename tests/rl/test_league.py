@@ -9,10 +9,10 @@ from types import SimpleNamespace
 
 import pytest
 
+from rllib_pommer.curriculum.curriculum import load_curriculum
+from rllib_pommer.curriculum.mapping import SeatMapping
+from rllib_pommer.curriculum.names import LEARNER
 from rllib_pommer.rl.config import build_config
-from rllib_pommer.rl.curriculum import load_curriculum
-from rllib_pommer.rl.mapping import SeatMapping
-from rllib_pommer.rl.names import LEARNER
 
 from .conftest import ECHO_ENV
 

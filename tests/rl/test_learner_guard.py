@@ -8,10 +8,10 @@ import dataclasses
 
 import torch
 
+from rllib_pommer.curriculum.curriculum import load_curriculum
+from rllib_pommer.curriculum.names import LEARNER
 from rllib_pommer.rl.config import build_config
-from rllib_pommer.rl.curriculum import load_curriculum
 from rllib_pommer.rl.learner import dual_clipped
-from rllib_pommer.rl.rl_module import LEARNER
 
 CLIP = 0.01
 

@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from rllib_pommer.curriculum.curriculum import load_curriculum
+from rllib_pommer.curriculum.names import LEARNER
 from rllib_pommer.rl.config import build_config
 from rllib_pommer.rl.connectors import FILTERS_KEY
-from rllib_pommer.rl.curriculum import load_curriculum
-from rllib_pommer.rl.rl_module import LEARNER
 
 from .conftest import ECHO_ENV
 

@@ -15,12 +15,12 @@ import pytest
 import torch
 from ray.rllib.algorithms.algorithm import Algorithm
 
+from rllib_pommer.curriculum.curriculum import load_curriculum
+from rllib_pommer.curriculum.mapping import SeatMapping
+from rllib_pommer.curriculum.matchmaking import Record, WeightedTurns, priority, shares
+from rllib_pommer.curriculum.names import EXPLOITER, LEARNER
 from rllib_pommer.rl.config import build_config
-from rllib_pommer.rl.curriculum import load_curriculum
 from rllib_pommer.rl.league import MATCHMAKING_MODULE, exploiter_step
-from rllib_pommer.rl.mapping import SeatMapping
-from rllib_pommer.rl.matchmaking import Record, WeightedTurns, priority, shares
-from rllib_pommer.rl.names import EXPLOITER, LEARNER
 
 from .test_self_play import SELF_PLAY_SMOKE, _same
 

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from rllib_pommer.rl.curriculum import load_curriculum
+from rllib_pommer.curriculum.curriculum import load_curriculum
 
 from .conftest import CURRICULUM
 
@@ -25,9 +25,9 @@ from pathlib import Path
 import ray, torch
 from ray.rllib.algorithms.algorithm import Algorithm
 from ray.rllib.core.rl_module.rl_module import RLModule
-from rllib_pommer.rl.checkpoint_policy import load_checkpoint_net
+from rllib_pommer.runs.checkpoints import load_checkpoint_net
 from ray.rllib.utils.metrics import ENV_RUNNER_RESULTS, NUM_EPISODES_LIFETIME
-from rllib_pommer.rl.rl_module import LEARNER
+from rllib_pommer.curriculum.names import LEARNER
 
 checkpoint, weights = Path(sys.argv[1]), Path(sys.argv[2])
 expected = load_checkpoint_net(checkpoint).state_dict()
@@ -88,7 +88,7 @@ def test_the_committed_campaign_checkpoint_restores_without_its_weights_file(
 
 def test_the_module_takes_pi_from_the_weights_or_a_checkpoint_and_never_trains_without(
         tmp_path, pi_weights):
-    from rllib_pommer.rl.env import ACTION_SPACE, OBSERVATION_SPACE
+    from rllib_pommer.envs.team import ACTION_SPACE, OBSERVATION_SPACE
     from rllib_pommer.rl.rl_module import PommerPPOModule
 
     def module(weights):
@@ -112,10 +112,11 @@ def test_a_curriculum_with_vf_weights_starts_vf_from_them_and_checks_the_file(tm
     and a file that is missing or not a value network is named before Ray starts."""
     import torch
 
+    from rllib_pommer.curriculum.names import LEARNER
+    from rllib_pommer.envs.team import ACTION_SPACE, OBSERVATION_SPACE
     from rllib_pommer.imitation.network import PommerNet
     from rllib_pommer.rl.config import build_config
-    from rllib_pommer.rl.env import ACTION_SPACE, OBSERVATION_SPACE
-    from rllib_pommer.rl.rl_module import LEARNER, PommerPPOModule
+    from rllib_pommer.rl.rl_module import PommerPPOModule
 
     torch.manual_seed(1)
     vf = PommerNet(1)

@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-import pickle
-
-from rllib_pommer.rl import training
+from rllib_pommer.launch import tune_callbacks
 
 
 def _result(iteration, episodes):
@@ -17,8 +15,8 @@ def _result(iteration, episodes):
 
 def test_progress_line_and_eta_after_a_resume(monkeypatch, capsys):
     clock = iter([1000.0, 1100.0])  # start-up and restore before the first result do not count
-    monkeypatch.setattr(training.time, "monotonic", lambda: next(clock))
-    progress = training.Progress()
+    monkeypatch.setattr(tune_callbacks.time, "monotonic", lambda: next(clock))
+    progress = tune_callbacks.Progress()
     progress.on_trial_result(1, [], None, _result(51, 8_000))
     progress.on_trial_result(2, [], None, _result(52, 8_200))  # 2 episodes/s
     first, second = capsys.readouterr().out.splitlines()
@@ -32,14 +30,6 @@ def test_progress_line_and_eta_after_a_resume(monkeypatch, capsys):
 def test_progress_line_tells_of_skipped_updates(capsys):
     result = _result(53, 1_200)
     result["learners"] = {"learner": {"nonfinite_updates_skipped": 3}}
-    training.Progress().on_trial_result(1, [], None, result)
+    tune_callbacks.Progress().on_trial_result(1, [], None, result)
     assert capsys.readouterr().out.rstrip().endswith(
         "at this stage's pace  (3 updates skipped: non-finite gradients)")
-
-
-def test_a_progress_pickled_by_an_older_version_resumes(capsys):
-    old = training.Progress.__new__(training.Progress)
-    old.__dict__.update({"_start": 5.0, "_first_episodes": 1134})  # the fields it once had
-    restored = pickle.loads(pickle.dumps(old))
-    restored.on_trial_result(1, [], None, _result(53, 1_200))
-    assert "episodes 1200/100000" in capsys.readouterr().out

@@ -6,7 +6,7 @@ import logging
 import subprocess
 import sys
 
-from rllib_pommer.rl import quiet
+from rllib_pommer.launch import quiet
 
 
 def test_silence_drops_each_noise_message_and_keeps_other_warnings(caplog):
@@ -26,8 +26,8 @@ def test_every_ray_worker_of_a_run_drops_the_noise():
     """`init_ray` hands Ray `silence` as the worker setup hook: a task in a worker of the run's
     Ray finds the filter on each noisy logger (a fresh interpreter: Ray starts once a process)."""
     code = ("import logging, ray\n"
-            "from rllib_pommer.rl import quiet\n"
-            "from rllib_pommer.rl.training import init_ray\n"
+            "from rllib_pommer.launch import quiet\n"
+            "from rllib_pommer.launch.training import init_ray\n"
             "init_ray(None, num_cpus=1)\n"
             "@ray.remote\n"
             "def filtered():\n"

@@ -11,16 +11,16 @@ import torch
 from ray.rllib.core.columns import Columns
 
 from rllib_pommer.arena.match import MatchSpec, play_match, record_games
+from rllib_pommer.curriculum.curriculum import load_curriculum
+from rllib_pommer.curriculum.names import LEARNER
 from rllib_pommer.envs.team import RADIO_ACTION_SPACE
 from rllib_pommer.imitation.features import message_features
 from rllib_pommer.imitation.learned import load_policy_net
 from rllib_pommer.imitation.network import RadioNet
-from rllib_pommer.rl.checkpoint_policy import load_checkpoint_net
 from rllib_pommer.rl.config import build_config
-from rllib_pommer.rl.curriculum import load_curriculum
 from rllib_pommer.rl.env import PommeEnv
 from rllib_pommer.rl.fixed_modules import fixed_module_spec
-from rllib_pommer.rl.rl_module import LEARNER
+from rllib_pommer.runs.checkpoints import load_checkpoint_net
 
 from .conftest import learner_episodes, log_softmax, smoke_run
 

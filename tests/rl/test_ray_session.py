@@ -11,7 +11,7 @@ import time
 
 import pytest
 
-from rllib_pommer.rl import ray_session
+from rllib_pommer.launch import ray_session
 
 
 def _holding_a_file_in(folder) -> subprocess.Popen:

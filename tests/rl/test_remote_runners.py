@@ -11,11 +11,11 @@ import sys
 import pytest
 import torch
 
+from rllib_pommer.curriculum.curriculum import load_curriculum
+from rllib_pommer.curriculum.names import LEARNER_THREADS_ENV
+from rllib_pommer.curriculum.settings import RunSettings
+from rllib_pommer.launch.training import cpus_per_env_runner
 from rllib_pommer.rl.config import build_config
-from rllib_pommer.rl.curriculum import load_curriculum
-from rllib_pommer.rl.names import LEARNER_THREADS_ENV
-from rllib_pommer.rl.settings import RunSettings
-from rllib_pommer.rl.training import cpus_per_env_runner
 
 
 def test_our_own_ray_instance_shares_its_cpus_between_the_learner_and_the_runners():
@@ -70,7 +70,7 @@ def test_a_curriculum_runs_on_two_remote_env_runners_and_a_two_thread_learner(
 
 
 def test_init_ray_hands_the_learner_threads_to_every_process_of_the_run():
-    code = ("import os, ray\nfrom rllib_pommer.rl.training import init_ray\n"
+    code = ("import os, ray\nfrom rllib_pommer.launch.training import init_ray\n"
             "init_ray(None, torch_threads=2)\n"
             f"read = ray.remote(lambda: os.environ.get({LEARNER_THREADS_ENV!r}))\n"
             "print(ray.get(read.remote()))\n"

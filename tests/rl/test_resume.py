@@ -6,8 +6,11 @@ checkpoint at the warm-up's end, and a packed run holds no pickle of Tune's."""
 from __future__ import annotations
 
 import contextlib
+import importlib
+import io
 import json
 import os
+import pickle
 import re
 import shutil
 import signal
@@ -16,19 +19,76 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
 import torch
 
 from rllib_pommer.imitation.learned import load_policy_net
-from rllib_pommer.rl import ray_session
-from rllib_pommer.rl.checkpoint_policy import (
+from rllib_pommer.launch import ray_session
+from rllib_pommer.launch.packing import TUNE_STATE
+from rllib_pommer.runs.checkpoints import (
     checkpoint_complete,
     checkpoint_iteration,
     load_checkpoint_net,
 )
-from rllib_pommer.rl.history import legs, read_rows
-from rllib_pommer.rl.packing import TUNE_STATE
+from rllib_pommer.runs.history import legs, read_rows
 
 REPO = Path(__file__).resolve().parents[2]
+STABLE_HEADING = "## Stable import paths"
+
+
+def stable_paths() -> set[str]:
+    """The class paths of ours a saved run may name, from docs/architecture.md's list."""
+    text = (REPO / "docs" / "architecture.md").read_text().split(STABLE_HEADING + "\n", 1)[1]
+    return set(re.findall(r"^- `(rllib_pommer\.[\w.]+)`", text.split("\n## ", 1)[0],
+                          flags=re.MULTILINE))
+
+
+class _Recording(pickle.Unpickler):
+    """Loads a pickle and notes every global of ours it names."""
+
+    def __init__(self, data: bytes, seen: set[str]):
+        super().__init__(io.BytesIO(data))
+        self.seen = seen
+
+    def find_class(self, module, name):
+        if module.split(".")[0] == "rllib_pommer":
+            self.seen.add(f"{module}.{name}")
+        return super().find_class(module, name)
+
+
+def _hex_pickles(value):
+    """The pickles Tune's experiment state holds as hex strings, at any depth."""
+    if isinstance(value, dict):
+        value = list(value.values())
+    if isinstance(value, list):
+        for item in value:
+            yield from _hex_pickles(item)
+    elif isinstance(value, str):
+        if len(value) > 16 and re.fullmatch(r"(?:[0-9a-f]{2})+", value):
+            yield bytes.fromhex(value)
+        elif value[:1] in "[{":
+            with contextlib.suppress(ValueError):
+                yield from _hex_pickles(json.loads(value))
+
+
+def pickled_classes(run: Path) -> set[str]:
+    """Every class of ours named by what Tune and RLlib pickled into the run folder `run`: its
+    Tune state, its trials' params.pkl and its checkpoints' class_and_ctor_args.pkl."""
+    seen: set[str] = set()
+    files = [*run.glob("tuner.pkl"), *run.glob("*/params.pkl"),
+             *run.glob("**/class_and_ctor_args.pkl")]
+    for path in files:
+        _Recording(path.read_bytes(), seen).load()
+    for state in run.glob("experiment_state-*.json"):
+        for data in _hex_pickles(json.loads(state.read_text())):
+            _Recording(data, seen).load()
+    return seen
+
+
+def test_the_stable_paths_are_importable():
+    for path in stable_paths():
+        module, _, name = path.rpartition(".")
+        assert hasattr(importlib.import_module(module), name), path
 
 
 def _train(out, pi_weights, *extra):
@@ -98,6 +158,9 @@ def test_resume_after_sigkill(tmp_path, pi_weights):
     final = results[-1]
     assert final["curriculum"]["episodes"] >= final["curriculum"]["total_episodes"]
     assert final["curriculum"]["stage_name"] == "static"
+    # What Tune and RLlib pickled for the resumed leg names no class of ours off the map's list.
+    named = pickled_classes(out)
+    assert named and named <= stable_paths(), sorted(named - stable_paths())
     # The warm-up's end was kept apart from the rotating checkpoints, with pi as it started.
     assert (out / "stages" / "2-static").is_dir()  # the final stage is kept too
     warmup_end = load_checkpoint_net(out / "stages" / "1-warmup").state_dict()
@@ -209,3 +272,33 @@ def test_a_packed_run_resumes_at_another_path(tmp_path, pi_weights):
                              "--vs", "static", "--games", "2", "--workers", "1"], cwd=tmp_path,
                             capture_output=True, text=True, timeout=300, env=elsewhere)
     assert played.returncode == 0 and "2 games" in played.stdout, played.stderr[-2000:]
+
+
+def test_a_campaign_packed_before_runs_resumed_from_data_resumes(tmp_path):
+    """A committed campaign packed when runs still resumed through Tune's pickled state (its
+    `tuner.pkl` and `params.pkl` name modules that have since moved): `--resume` reads none of
+    that, goes on from its checkpoint in a new leg (the run had finished: one iteration), and the
+    run's history reads as one."""
+    campaign = REPO / "campaign" / "no_curriculum"
+    if not (campaign / "tuner.pkl").is_file():
+        pytest.skip("the campaign packed before the change is not in this checkout")
+    run = tmp_path / "campaign" / "no_curriculum"
+    shutil.copytree(campaign, run)
+    (old,) = run.glob("PPO_*")
+    (checkpoint,) = old.glob("checkpoint_*")
+    iteration = checkpoint_iteration(checkpoint)
+    before = read_rows(old)
+    resumed = subprocess.run([sys.executable, "-m", "rllib_pommer.train", "--out", str(run),
+                              "--resume"], cwd=tmp_path, capture_output=True, text=True,
+                             timeout=600)
+    assert resumed.returncode == 0, resumed.stderr[-3000:]
+    leg = _newest_leg(run)
+    assert legs(leg) == [old, leg]
+    rows = read_rows(leg)
+    assert rows[: len(before)] == before
+    first = rows[len(before)]
+    assert _iteration(first) == iteration + 1
+    assert (first["env_runners/num_episodes_lifetime"] - first["env_runners/num_episodes"]
+            == int(float(before[-1]["env_runners/num_episodes_lifetime"])))
+    named = pickled_classes(run)
+    assert named <= stable_paths(), sorted(named - stable_paths())

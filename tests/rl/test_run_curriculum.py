@@ -12,8 +12,8 @@ from types import SimpleNamespace
 
 import pytest
 
-from rllib_pommer.rl import training
-from rllib_pommer.rl.curriculum import RUN_CURRICULUM_FILE, curriculum_dir
+from rllib_pommer.curriculum.curriculum import RUN_CURRICULUM_FILE, curriculum_dir
+from rllib_pommer.launch import training
 from rllib_pommer.train import main as train_main
 
 

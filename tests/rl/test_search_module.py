@@ -11,7 +11,9 @@ from ray.rllib.core.columns import Columns
 from rllib_pommer.agents.belief import RNG
 from rllib_pommer.agents.registry import resolve_policy
 from rllib_pommer.agents.search import Effort, new_memory, search_actions
-from rllib_pommer.rl.env import ACTION_SPACE, OBSERVATION_SPACE, PommeEnv, unpack_raw
+from rllib_pommer.envs.team import ACTION_SPACE, OBSERVATION_SPACE
+from rllib_pommer.game.raw_codec import unpack_raw
+from rllib_pommer.rl.env import PommeEnv
 from rllib_pommer.rl.fixed_modules import _seed_streams, fixed_module_spec
 from rllib_pommer.rl.search_module import SearchModule
 

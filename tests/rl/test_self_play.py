@@ -11,11 +11,11 @@ import torch
 from ray.rllib.algorithms.algorithm import Algorithm
 
 from rllib_pommer.arena.match import MatchSpec, play_match
+from rllib_pommer.curriculum.curriculum import load_curriculum
+from rllib_pommer.curriculum.names import LEARNER
 from rllib_pommer.rl.config import build_config
 from rllib_pommer.rl.connectors import FIXED_FILTERS_KEY
-from rllib_pommer.rl.curriculum import load_curriculum
 from rllib_pommer.rl.league import read_book
-from rllib_pommer.rl.names import LEARNER
 
 # Suicide opponents lose every game, so the first block passes the gate; a block is one
 # iteration's games at most (gate_games 4) and the second slot stays empty until the next.

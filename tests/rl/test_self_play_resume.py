@@ -17,16 +17,16 @@ import sys
 import pytest
 import torch
 
-from rllib_pommer.rl.checkpoint_policy import (
+from rllib_pommer.curriculum.curriculum import load_curriculum
+from rllib_pommer.curriculum.matchmaking import Record
+from rllib_pommer.rl.league import MATCHMAKING_MODULE, Slot, members, next_slot
+from rllib_pommer.runs.checkpoints import (
     MODULES_DIR,
     checkpoint_complete,
     checkpoint_iteration,
     load_checkpoint_net,
     read_module_state,
 )
-from rllib_pommer.rl.curriculum import load_curriculum
-from rllib_pommer.rl.league import MATCHMAKING_MODULE, Slot, members, next_slot
-from rllib_pommer.rl.matchmaking import Record
 
 from .test_resume import REPO, _interrupt, _newest_leg, _results, _train, _wait_for
 from .test_self_play import SELF_PLAY_SMOKE

@@ -1,17 +1,19 @@
-"""PPO and run settings written once (rl/settings.py): a curriculum overrides only the options, the
+"""PPO and run settings written once (curriculum/settings.py): a curriculum overrides only the
+options, the
 PPOConfig carries every value, the committed campaign resumes with the values it started with,
 and `train`'s options are the fields of RunSettings, checked before Ray starts."""
 
 from __future__ import annotations
 
 import dataclasses
-import pickle
+import json
+from pathlib import Path
 
 import pytest
 
+from rllib_pommer.curriculum.curriculum import load_curriculum
+from rllib_pommer.curriculum.settings import PPOSettings, RunSettings
 from rllib_pommer.rl.config import build_config
-from rllib_pommer.rl.curriculum import load_curriculum
-from rllib_pommer.rl.settings import PPOSettings, RunSettings
 
 from ..conftest import REPO_ROOT
 from ..test_layering import _loaded
@@ -39,15 +41,10 @@ def test_every_setting_but_checkpointing_reaches_the_ppo_config(tmp_path):
     curriculum = load_curriculum(tmp_path / "c.toml")
     assert curriculum.ppo == PPOSettings(lr=3e-4, lambda_=0.9, num_epochs=2, dual_clip=3.0)
     expected = dataclasses.asdict(curriculum.ppo)
-    del expected["checkpoint_every"]  # Tune's, not PPO's: rl/training.py
-    config = build_config(curriculum, restoring=True).to_dict()
+    del expected["checkpoint_every"]  # Tune's, not PPO's: launch/training.py
+    config = build_config(curriculum, restore_from=Path("checkpoint")).to_dict()
     assert config["learner_config_dict"] == {"dual_clip": expected.pop("dual_clip")}  # learner.py
     assert _config_values(config) == expected
-
-
-def test_without_a_dual_clip_the_learner_config_has_no_key_for_it():
-    """Tune's key check (below): runs started before the option existed resume without it."""
-    assert build_config(load_curriculum("paper"), restoring=True).learner_config_dict == {}
 
 
 @pytest.mark.parametrize("table, error", [
@@ -66,19 +63,14 @@ def test_a_ppo_table_sets_options_only_and_in_range(tmp_path, table, error):
 
 
 def test_the_committed_campaign_resumes_with_the_ppo_settings_it_started_with():
-    """The trial config Tune pickled when campaign/paper started (old code: a dict of options)
-    against the config this code builds for `--resume` (RLlib stores classes by import path, so
-    unpickling also proves those paths still import)."""
-    trials = sorted((REPO_ROOT / "campaign" / "paper").glob("PPO_*/params.pkl"))
+    """The trial config Tune wrote as data (params.json) when campaign/paper started, against
+    the config this code builds for `--resume`."""
+    trials = sorted((REPO_ROOT / "campaign" / "paper").glob("PPO_*/params.json"))
     if not trials:
         pytest.skip("no committed campaign in this checkout")
-    with open(trials[0], "rb") as f:
-        started = pickle.load(f)
-    paper = load_curriculum("paper")
-    assert _config_values(started) == _config_values(build_config(paper, restoring=True).to_dict())
-    ppo = started["callbacks"].args[0].ppo  # a dict of options before PPOSettings existed
-    every = ppo["checkpoint_every"] if isinstance(ppo, dict) else ppo.checkpoint_every
-    assert every == paper.ppo.checkpoint_every
+    started = json.loads(trials[0].read_text())
+    config = build_config(load_curriculum("paper"), restore_from=Path("checkpoint")).to_dict()
+    assert _config_values(started) == _config_values(config)
 
 
 @pytest.mark.parametrize("option, value, error", [
@@ -112,7 +104,7 @@ def test_our_ray_gets_the_run_settings_cpus(monkeypatch):
     import ray
     import torch
 
-    from rllib_pommer.rl.training import init_ray
+    from rllib_pommer.launch.training import init_ray
 
     calls = []
     monkeypatch.setattr(ray, "init", lambda **kwargs: calls.append(kwargs))
@@ -128,6 +120,6 @@ def test_our_ray_gets_the_run_settings_cpus(monkeypatch):
 
 def test_settings_and_the_train_parser_load_neither_ray_nor_torch():
     parse = ("import argparse; rllib_pommer.util.cli_options.add_options("
-             "argparse.ArgumentParser(), rllib_pommer.rl.settings.RunSettings, {})")
-    assert _loaded(["rllib_pommer.rl.settings", "rllib_pommer.util.cli_options",
+             "argparse.ArgumentParser(), rllib_pommer.curriculum.settings.RunSettings, {})")
+    assert _loaded(["rllib_pommer.curriculum.settings", "rllib_pommer.util.cli_options",
                     "rllib_pommer.train"], ("ray", "torch"), parse) == ""

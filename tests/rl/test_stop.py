@@ -15,8 +15,8 @@ import textwrap
 import time
 from pathlib import Path
 
-from rllib_pommer.rl.checkpoint_policy import ALGORITHM_STATE, MODULE_STATE, checkpoint_iteration
-from rllib_pommer.rl.packing import STOP_REQUEST, stop_run
+from rllib_pommer.launch.packing import STOP_REQUEST, stop_run
+from rllib_pommer.runs.checkpoints import ALGORITHM_STATE, MODULE_STATE, checkpoint_iteration
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -26,7 +26,7 @@ REPO = Path(__file__).resolve().parents[2]
 STAND_IN = textwrap.dedent("""
     import json, os, pickle, signal, sys, time
     from pathlib import Path
-    from rllib_pommer.rl import ray_session
+    from rllib_pommer.launch import ray_session
 
     out, period, late = Path(sys.argv[1]), float(sys.argv[2]), sys.argv[3] == "late"
     ALGORITHM_STATE, MODULE_STATE = sys.argv[4:6]

@@ -8,9 +8,9 @@ import numpy as np
 import torch
 import tree
 
+from rllib_pommer.curriculum.curriculum import load_curriculum
+from rllib_pommer.curriculum.names import LEARNER
 from rllib_pommer.rl.config import build_config
-from rllib_pommer.rl.curriculum import load_curriculum
-from rllib_pommer.rl.rl_module import LEARNER
 from rllib_pommer.rl.trained_agents import TrainedAgentsOnly, every_agent_pipeline
 
 

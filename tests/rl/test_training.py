@@ -8,8 +8,8 @@ import pytest
 import torch
 
 from rllib_pommer.arena.match import MatchSpec, play_match
-from rllib_pommer.rl.checkpoint_policy import load_checkpoint_net
-from rllib_pommer.rl.rl_module import LEARNER
+from rllib_pommer.curriculum.names import LEARNER
+from rllib_pommer.runs.checkpoints import load_checkpoint_net
 
 from .conftest import learner_episodes, log_softmax, smoke_run
 

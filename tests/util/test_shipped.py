@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from rllib_pommer.agents.registry import resolve_policy
-from rllib_pommer.rl.curriculum import find_curriculum, load_curriculum
+from rllib_pommer.curriculum.curriculum import find_curriculum, load_curriculum
 from rllib_pommer.util import shipped
 
 REPO = Path(__file__).resolve().parents[2]

@@ -4,9 +4,9 @@ what the training figures draw (`viz/training.py`: this module computes, viz/ dr
 A trial directory holds `result.json` (one JSON result per line, flattened with "/" as Tune
 does; read first: Tune's CSV appends rows whose set of keys changed under the old header, which
 scrambles the columns) or `progress.csv`, one row per training iteration, and, in a run packed
-to be carried to another machine (`rl.packing.pack_run`), `history.csv`: the summary rows of the
+to be carried to another machine (`launch.packing.pack_run`), `history.csv`: the summary rows of the
 iterations before the pack, read before the others. A run holds one Tune trial per start, its
-legs (`legs`: each `--resume` starts a new trial from the newest checkpoint, rl/training.py),
+legs (`legs`: each `--resume` starts a new trial from the newest checkpoint, launch/training.py),
 in the order of the start time Tune puts in the trial's name; a trial's history is its run's
 rows up to and including its own leg (`read_trial`), so a resumed run reads as one. A resumed
 run repeats the iterations after its checkpoint: the rows of the restored run replace the ones
@@ -61,6 +61,7 @@ from pathlib import Path
 import numpy as np
 
 from ..agents.registry import policy_names, resolve_policy
+from ..curriculum.curriculum import run_curriculum
 from ..viz.training import (
     MEMBER_WINDOW,
     OUTCOME_KEYS,
@@ -72,7 +73,6 @@ from ..viz.training import (
     TrainingCurve,
     phases,
 )
-from .curriculum import run_curriculum
 
 RETURN_COLUMNS = ("env_runners/module_episode_returns_mean/learner",
                   "env_runners/episode_return_mean", "episode_reward_mean")
@@ -82,7 +82,7 @@ STAGE_COLUMNS = ("curriculum/iteration_stage_name", "curriculum/stage_name", "cu
                  "curriculum_kind")
 REWARD_COLUMN = "curriculum/iteration_reward"
 HISTORY_FILE = "history.csv"
-# An exported policy's folder (`rl/checkpoint_policy.export_policy`): where it came from, and the
+# An exported policy's folder (`runs/export.export_policy`): where it came from, and the
 # summary of its run's rows up to the exported checkpoint, which its model card is drawn from.
 POLICY_SOURCE_FILE = "source.json"
 POLICY_HISTORY_DIR = "history"

@@ -11,7 +11,7 @@ A run is resumed from its data, never from pickled code: `resume` packs the run
 starts a new Tune trial whose algorithm, built from the curriculum and the command's settings
 as a new run's is, loads that checkpoint's state when it is built (rl/stages.py). Since the stage
 follows from the restored lifetime episode count, stage, counters, league and iteration pick up
-where they were; the run's history reads its legs as one (rl/history.py). Nothing Tune pickled
+where they were; the run's history reads its legs as one (runs/history.py). Nothing Tune pickled
 (its experiment state, `params.pkl`) is read again, so a run resumes after our modules moved,
 and with another number of env runners. Tune saves its state and copies the trial's result files
 to the run folder every 10 s (`SNAPSHOT_PERIOD_S`); what saving on every controller step costs is
@@ -24,30 +24,27 @@ for `--resume` anywhere.
 from __future__ import annotations
 
 import os
-import shutil
-import signal
 import socket
-import time
 from pathlib import Path
 
 import ray
 import torch
 from ray import tune
-from ray.tune.result import SHOULD_CHECKPOINT
 
-from ..util.errors import first_sentence
-from . import quiet, ray_session
-from .config import build_config, check_weights
-from .curriculum import (
+from ..curriculum.curriculum import (
     DEFAULT_CURRICULUM,
     Curriculum,
     load_curriculum,
     record_run_curriculum,
     resume_curriculum,
 )
-from .names import LEARNER, LEARNER_THREADS_ENV
+from ..curriculum.names import LEARNER_THREADS_ENV
+from ..curriculum.settings import RunSettings
+from ..rl.config import build_config, check_weights
+from ..util.errors import first_sentence
+from . import quiet, ray_session
 from .packing import has_run, pack_run, take_stop_request
-from .settings import RunSettings
+from .tune_callbacks import Progress, StageCheckpoints, StopOnRequest
 
 STOP_KEY = "env_runners/num_episodes_lifetime"
 # TUNE_GLOBAL_CHECKPOINT_S. A SIGKILL loses at most these seconds of result rows, never a
@@ -75,7 +72,7 @@ def init_ray(address: str | None, *, num_cpus: int = RunSettings.num_cpus,
     torch.set_flush_denormal(True)
     quiet.silence()  # here, and in every worker through the hook below
     job_env = {"env_vars": {LEARNER_THREADS_ENV: str(torch_threads)},  # for learner.py
-               "worker_process_setup_hook": "rllib_pommer.rl.quiet.silence"}
+               "worker_process_setup_hook": "rllib_pommer.launch.quiet.silence"}
     if address is not None and address != "auto":
         host, _, port = address.removeprefix("ray://").rpartition(":")
         try:
@@ -98,122 +95,6 @@ def init_ray(address: str | None, *, num_cpus: int = RunSettings.num_cpus,
         where = f"the Ray cluster at {address!r}" if address else "a local Ray instance"
         raise RayStartError(f"{where} did not start ({first_sentence(exc)}); "
                             f"{RAY_START_HINT}") from None
-
-
-def _duration(seconds: float) -> str:
-    minutes, seconds = divmod(int(seconds), 60)
-    return f"{minutes // 60}h{minutes % 60:02d}m" if minutes >= 60 else f"{minutes}m{seconds:02d}s"
-
-
-def _eta(episodes_left: int, episodes_per_s: float) -> str:
-    return _duration(max(episodes_left, 0) / episodes_per_s) if episodes_per_s > 0 else "?"
-
-
-class FreshOnRestore(tune.Callback):
-    """Tune pickles its callbacks with the experiment and unpickles them on `--resume`; these
-    keep only per-process bookkeeping, so they start afresh (also from an older version's pickle,
-    whose fields may differ)."""
-
-    def __setstate__(self, state):
-        self.__init__()
-
-
-class Progress(FreshOnRestore):
-    """One line per iteration: stage, episodes, win/loss/tie, env steps/s and the time left in the
-    stage and in the run, both at the games/s seen since the first result. The run's figure is a
-    floor early on, since a curriculum's later games may last longer (the paper campaign's are
-    measured in docs/measurements.md), so the line says whose pace it assumes. Under prioritized
-    matchmaking it names the league member the learner will meet most. An iteration
-    whose learner skipped updates for non-finite gradients (learner.py) says how many."""
-
-    def __init__(self):
-        self._first: tuple[float, int] | None = None  # (time, episodes) of the first result seen
-
-    def on_trial_result(self, iteration, trials, trial, result, **info):
-        stage = result.get("curriculum", {})
-        runners = result.get("env_runners", {})
-        episodes, total = stage.get("episodes", 0), stage.get("total_episodes", 0)
-        now = time.monotonic()
-        if self._first is None:  # measure from here: start-up and restore are not training
-            self._first = (now, episodes)
-        elapsed = now - self._first[0]
-        rate = (episodes - self._first[1]) / elapsed if elapsed > 0 else 0.0
-        stage_end = stage.get("stage_end_episodes", total)
-        steps_per_s = runners.get("num_env_steps_sampled", 0) / max(result["time_this_iter_s"],
-                                                                       1e-9)
-        print(f"[{stage.get('stage', 0) + 1}:{stage.get('stage_name', '?')}] "
-              f"iter {result['training_iteration']}  episodes {episodes}/{total}  "
-              f"W/L/T {runners.get('learner_win', 0):.2f}/{runners.get('learner_loss', 0):.2f}/"
-              f"{runners.get('learner_tie', 0):.2f}  return {runners.get('learner_return', 0):+.2f}"
-              f"{_kills(runners)}"
-              f"  {steps_per_s:.0f} env steps/s  ETA stage {_eta(stage_end - episodes, rate)}, "
-              f"run {_eta(total - episodes, rate)} at this stage's pace{_hardest(result)}"
-              f"{_skipped(result)}", flush=True)
-
-
-def _hardest(result: dict) -> str:
-    """Under prioritized matchmaking, the member that gets the largest share of the coming
-    games, with the learner's win-rate estimate against it (rl/matchmaking.py)."""
-    shares = result.get("matchmaking")
-    if not shares:
-        return ""
-    name, entry = max(shares.items(), key=lambda item: item[1]["share"])
-    return f"  most played next: {name} {entry['share']:.2f} (won {entry['win_rate']:.2f})"
-
-
-def _kills(runners: dict) -> str:
-    """Per game: enemies the learner's team killed, and each team's suicides, where logged."""
-    if "learner_kills" not in runners:
-        return ""
-    return (f"  kills {runners['learner_kills']:.2f} (suicides ours "
-            f"{runners.get('learner_suicides', 0):.2f}, theirs "
-            f"{runners.get('learner_opponent_suicides', 0):.2f})")
-
-
-def _skipped(result: dict) -> str:
-    skipped = result.get("learners", {}).get(LEARNER, {}).get("nonfinite_updates_skipped", 0)
-    return f"  ({skipped:.0f} updates skipped: non-finite gradients)" if skipped else ""
-
-
-class StopOnRequest(FreshOnRestore):
-    """Stops the run, with every iteration it finished in a checkpoint, when `train --stop`
-    asks (`packing.stop_run`): the first result after the request is checkpointed (Tune's
-    `should_checkpoint`), and once that checkpoint is saved the driver interrupts itself as
-    Ctrl-C would, before another iteration ends. Tune stays in charge of the trial's state, so
-    the run resumes as after Ctrl-C (a trial stopped by Tune's own criteria would count as
-    finished and never resume)."""
-
-    def __init__(self):
-        self._stopping: set[str] = set()
-
-    def on_trial_result(self, iteration, trials, trial, result, **info):
-        if take_stop_request(Path(trial.path).parent):  # <run>/<trial>
-            result[SHOULD_CHECKPOINT] = True
-            self._stopping.add(trial.trial_id)
-
-    def on_checkpoint(self, iteration, trials, trial, checkpoint, **info):
-        if trial.trial_id in self._stopping:
-            signal.raise_signal(signal.SIGINT)  # Tune's handler ends the run after this step
-
-
-class StageCheckpoints(FreshOnRestore):
-    """Copies the checkpoint taken at a stage's end to `<run>/stages/<number>-<stage name>`, out of
-    reach of Tune's rotation (it keeps the latest three): the policy after each phase of the
-    curriculum, to evaluate or to put in a league (policy kind rllib_checkpoint)."""
-
-    def __init__(self):
-        self._ended: dict[str, str] = {}
-
-    def on_trial_result(self, iteration, trials, trial, result, **info):
-        ended = result.get("curriculum", {}).get("ended_stage")
-        if ended:
-            self._ended[trial.trial_id] = ended
-
-    def on_checkpoint(self, iteration, trials, trial, checkpoint, **info):
-        ended = self._ended.pop(trial.trial_id, None)
-        if ended:
-            run_dir = Path(checkpoint.path).parents[1]  # <run>/<trial>/checkpoint_*
-            shutil.copytree(checkpoint.path, run_dir / "stages" / ended, dirs_exist_ok=True)
 
 
 def check_run_dir(out: Path, resume: bool) -> None:

@@ -77,7 +77,7 @@ class PPOSettings(TableSettings):
 @dataclass(frozen=True)
 class LeagueSettings(TableSettings):
     """Self-play snapshot slots and the gate that fills them (rl/league.py), and how the
-    league's members are matched with the learner (rl/matchmaking.py)."""
+    league's members are matched with the learner (curriculum/matchmaking.py)."""
 
     slots: int = _option(4, high=16)  # frozen modules snapshot_0 .. snapshot_{slots - 1}
     gate_games: int = _option(400)  # league games per block of the gate

@@ -37,15 +37,14 @@ import torch
 from ray.rllib.execution.rollout_ops import synchronous_parallel_sample
 from ray.tune.registry import register_env
 
+from ..curriculum.curriculum import load_curriculum
+from ..curriculum.names import ENV_NAME, LEARNER, LEARNER_THREADS_ENV
+from ..curriculum.settings import RunSettings
 from ..imitation import speed as imitation_speed
 from ..imitation.network import PommerNet
-from .config import build_config
-from .curriculum import load_curriculum
-from .env import ENV_NAME, PommeEnv
-from .names import LEARNER_THREADS_ENV
-from .rl_module import LEARNER
-from .settings import RunSettings
-from .trained_agents import every_agent_pipeline
+from ..rl.config import build_config
+from ..rl.env import PommeEnv
+from ..rl.trained_agents import every_agent_pipeline
 from .training import cpus_per_env_runner, init_ray
 
 ZERO_COST_ENV = "pommerman_team_zero_cost"
@@ -128,7 +127,7 @@ def layout_speeds(iterations: int = 5, curriculum: str = "quick",
                   layouts: tuple[tuple[int, int], ...] = ((0, 1), (2, 2))) -> dict:
     """Env steps/s of the whole PPO loop on the real env for each (remote env runners, learner
     torch threads), side by side in one Ray instance of `RunSettings.num_cpus` CPUs: how a run
-    that has the machine to itself should use it (rl/training.cpus_per_env_runner)."""
+    that has the machine to itself should use it (launch/training.cpus_per_env_runner)."""
     result = {"curriculum": curriculum, "iterations": iterations}
     with _random_pi_weights() as weights:
         plan = load_curriculum(curriculum)

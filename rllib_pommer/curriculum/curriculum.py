@@ -17,26 +17,25 @@ the stages in order::
     episodes = 10000
     freeze_pi = true
 
-A stage lasts `episodes` lifetime episodes (counted over all env runners). Policies are names
-from `policies/` (never paths: each name is an RLlib module id) whose kind has a fixed RLlib
-module (`agents/registry.KINDS`: scripted kinds, or frozen learned / RLlib-checkpoint policies,
-whose files are read and checked as the arena reads them); a teammate may also be `"learner"`,
-the trained policy itself, so both seats of its team learn as one policy (the paper's recipe
-keeps a SuicideTeammate beside a lone learner), and an opponent a list of policies, a league
-that takes turns by episodes (`opponent = ["simple", "static", "ppo_cautious"]`; rl/mapping.py
-says how), and names may carry the registry's filter suffixes (`simple_action`: SimpleAgent
-behind the action filter). A `[league]` table (`slots`, `gate_games`, `gate_win`) adds frozen
-self-play snapshots of the learner, which join the league of every stage marked `self_play =
-true` (rl/league.py; a `[league]` table needs at least one), and may ask for `matchmaking =
-"prioritized"` (with `priority_power`, `priority_floor`, `priority_halflife`): the league's
-members then meet the learner by how often it fails to beat them (rl/matchmaking.py) instead of
-in turn.
-`game = "radio"` trains in TeamRadio: the learner's action is [move, word, word] and it hears its
-teammate's words (rl/rl_module.py); scripted and Team policies in the other seats play moves,
-which send no words, so `teammate = "learner"` is how the words reach a listener that learns;
-self-play snapshots are Team nets, so a radio curriculum has no [league]. Every error names the
-file, the key and the valid choices, so a typo fails before Ray starts: this module
-imports neither Ray nor torch (tests/test_layering.py checks a whole load in a fresh interpreter).
+A stage lasts `episodes` lifetime episodes (counted over all env runners). Policies are names from
+`policies/` (never paths: each name is an RLlib module id) whose kind has a fixed RLlib module
+(`agents/registry.KINDS`: scripted kinds, or frozen learned / RLlib-checkpoint policies, whose files
+are read and checked as the arena reads them); a teammate may also be `"learner"`, the trained
+policy itself, so both seats of its team learn as one policy (the paper's recipe keeps a
+SuicideTeammate beside a lone learner), and an opponent a list of policies, a league that takes
+turns by episodes (`opponent = ["simple", "static", "ppo_cautious"]`; curriculum/mapping.py says
+how), and names may carry the registry's filter suffixes (`simple_action`: SimpleAgent behind the
+action filter). A `[league]` table (`slots`, `gate_games`, `gate_win`) adds frozen self-play
+snapshots of the learner, which join the league of every stage marked `self_play = true`
+(rl/league.py; a `[league]` table needs at least one), and may ask for `matchmaking = "prioritized"`
+(with `priority_power`, `priority_floor`, `priority_halflife`): the league's members then meet the
+learner by how often it fails to beat them (curriculum/matchmaking.py) instead of in turn. `game =
+"radio"` trains in TeamRadio: the learner's action is [move, word, word] and it hears its teammate's
+words (rl/rl_module.py); scripted and Team policies in the other seats play moves, which send no
+words, so `teammate = "learner"` is how the words reach a listener that learns; self-play snapshots
+are Team nets, so a radio curriculum has no [league]. Every error names the file, the key and the
+valid choices, so a typo fails before Ray starts: this module imports neither Ray nor torch
+(tests/test_layering.py checks a whole load in a fresh interpreter).
 """
 
 from __future__ import annotations
@@ -78,7 +77,7 @@ TOP_KEYS = ("name", "description", "game", "pi_weights", "vf_weights", "max_step
 class Stage:
     """One phase of a curriculum: who plays, for how many episodes, with which reward and
     filters, and whether pi is frozen. `opponent` is a policy name, or a league of them that
-    take turns (rl/mapping.py)."""
+    take turns (curriculum/mapping.py)."""
     name: str
     opponent: str | tuple[str, ...]
     episodes: int

@@ -18,7 +18,7 @@ Who plays next is decided without randomness, by smooth weighted round robin (th
 balances servers with): each turn every member's credit grows by its weight, the member with
 the most credit plays, and its credit falls by the total weight. Over any stretch of turns
 each member plays its share to within one turn, and a seeded run replays exactly. With equal
-weights it is plain round robin, the uniform league's order (rl/mapping.py).
+weights it is plain round robin, the uniform league's order (curriculum/mapping.py).
 
 No Ray, no torch: the curriculum checker and the seat mapping use this module; the record's
 home in checkpoints is `rl/league.MatchmakingModule`.

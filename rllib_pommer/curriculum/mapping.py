@@ -5,7 +5,7 @@ teams ({0, 2} and {1, 3}, which differ: the reference shows a seat effect) and b
 each; its teammate sits across (seat + 2) and the two other seats get the stage's opponent. A
 stage may name a league of opponents instead of one: they take turns by whole seat cycles
 (episodes 0-3 the first, 4-7 the second, ...), so every opponent meets the learner in every
-seat as often as the others. A league under prioritized matchmaking (rl/matchmaking.py)
+seat as often as the others. A league under prioritized matchmaking (curriculum/matchmaking.py)
 carries `weights`, one per opponent: whole seat cycles still go to one opponent each, but who
 gets the next cycle follows the weights (smooth weighted round robin, no randomness), and the
 callback updates the weights in place after every iteration. Module ids are the policy names

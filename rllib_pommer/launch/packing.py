@@ -19,15 +19,15 @@ import signal
 import time
 from pathlib import Path
 
-from . import ray_session
-from .checkpoint_policy import (
+from ..curriculum.curriculum import RUN_CURRICULUM_FILE
+from ..runs.checkpoints import (
     checkpoint_age,
     checkpoint_complete,
     checkpoint_iteration,
     trial_dirs,
 )
-from .curriculum import RUN_CURRICULUM_FILE
-from .history import HISTORY_FILE, read_trial, write_summary
+from ..runs.history import HISTORY_FILE, read_trial, write_summary
+from . import ray_session
 
 STOP_REQUEST = "stop_request"  # in the run folder: `stop_run` asks the driver to stop
 # What Tune pickles into a run folder, code paths and all; a packed run holds none of it.
@@ -40,7 +40,7 @@ TRIAL_LOGS = ("result.json", "progress.csv", "events.out.tfevents.*")
 def stop_run(out: Path, say=print, poll: float = 0.5, timeout: float = 600.0) -> Path:
     """Stop the run training in `out` with every iteration it finished in a checkpoint, wait for
     it to exit and say where it stopped. The request (`STOP_REQUEST`) is taken by the driver's
-    Tune callback (`training.StopOnRequest`): the iteration under way ends, is checkpointed,
+    Tune callback (`tune_callbacks.StopOnRequest`): the iteration under way ends, is checkpointed,
     and the run stops as on Ctrl-C. A driver that does not take it (one whose Tune callbacks,
     restored with the run, lack that one) is interrupted right after its next checkpoint; if it
     still finished an iteration after that checkpoint, the report says which ones are in no
