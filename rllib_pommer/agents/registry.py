@@ -19,12 +19,15 @@ A last suffix `_words` (`simple_words`, `X_action_words`) makes the agent speak 
 but for those that speak themselves (a learned radio network, a remote agent).
 
 The folder is the repository's `policies/` (a wheel's copy of it), or the directory named by
-RLLIB_POMMER_POLICIES: `shipped.data_dir` finds it from any working directory.
+RLLIB_POMMER_POLICIES: `shipped.data_dir` finds it from any working directory. The format has one
+owner: `resolve_policy` reads the files and `write_policy_file` writes them (a trained policy's
+file, written by imitation and by the run export).
 """
 
 from __future__ import annotations
 
 import importlib
+import json
 import math
 import os
 import sys
@@ -215,6 +218,33 @@ def _load_spec(path: Path, filters: tuple[str, ...]) -> PolicySpec:
     if any(key in (KINDS[kind].keys or {}) for key in ACTING_KEYS):
         acting(spec)  # checked with the file, whoever reads it (arena, training, a curriculum)
     return spec
+
+
+def _toml_value(value: Any) -> str:
+    """`value` (a string, bool, integer or finite float) as TOML: JSON's string escapes are
+    TOML's (non-ASCII kept as is, since TOML refuses the surrogate pairs JSON would write)."""
+    if isinstance(value, str):
+        return json.dumps(value, ensure_ascii=False)
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int) or (isinstance(value, float) and math.isfinite(value)):
+        return repr(value)
+    raise ValueError(f"a policy file holds strings, booleans, integers and finite numbers, "
+                     f"not {value!r}")
+
+
+def write_policy_file(path: Path, kind: str, description: str, **params: Any) -> Path:
+    """Write the policy file `path` as `resolve_policy` reads it: `kind`, the kind's keys
+    `params` in the order given, then `description`. The keys are checked as the reader checks
+    them, so a file written here always loads (a ValueError names what is wrong)."""
+    if kind not in KINDS:
+        raise ValueError(f"policy file {path}: kind {kind!r} is not one of {sorted(KINDS)}")
+    _check_params(path, kind, params)
+    lines = [f"kind = {_toml_value(kind)}"]
+    lines += [f"{key} = {_toml_value(value)}" for key, value in params.items()]
+    lines.append(f"description = {_toml_value(description)}")
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return path
 
 
 class UnknownPolicy(ValueError):

@@ -27,6 +27,7 @@ from torch.nn import functional as F
 from torch.utils.tensorboard import SummaryWriter
 from tqdm import tqdm
 
+from ..agents import registry
 from ..data.dataset import Dataset, open_dataset
 from ..data.schema import Batch
 from .features import featurize
@@ -102,8 +103,9 @@ class BCConfig:
 
 
 def set_cpu_options(threads: int) -> None:
-    """The CPU settings that matter on small machines: a fixed thread count,
-    and flushing denormals, without which sparse binary planes slow the backward pass ~6x."""
+    """The CPU settings that matter on small machines: a fixed thread count, and flushing
+    denormals, which the sparse binary planes otherwise produce in the backward pass, slowing it
+    several times over (docs/measurements.md)."""
     torch.set_num_threads(threads)
     torch.set_flush_denormal(True)
 
@@ -317,24 +319,15 @@ def train(cfg: BCConfig) -> dict:
     return metrics
 
 
-def _toml_string(text: str) -> str:
-    """A TOML basic string: JSON's escapes are TOML's (non-ASCII kept as is, since TOML refuses
-    the surrogate pairs JSON would write for it)."""
-    return json.dumps(text, ensure_ascii=False)
-
-
 def policy_file_of(out: Path) -> Path:
     """The policy file of the weights folder `out`: `<out name>.toml` beside it."""
     return out.parent / f"{out.name}.toml"
 
 
 def write_policy_file(out: Path, description: str, greedy: bool = True) -> Path:
-    """`<out name>.toml` beside the weights folder `out`: the policy file (kind "learned") by
-    which the arena, training and serving find the policy by name (agents/registry.py)."""
-    policy = policy_file_of(out)
-    # greedy by default: a clone plays SimpleAgent's most likely action (sampling won 0.165 of
-    # 200 games against SimpleAgent, greedy play 0.290, with v1's first-epoch weights)
-    policy.write_text(f'kind = "learned"\nweights = {_toml_string(f"{out.name}/{WEIGHTS_FILE}")}\n'
-                      f'greedy = {str(greedy).lower()}\n'
-                      f'description = {_toml_string(description)}\n', encoding="utf-8")
-    return policy
+    """`<out name>.toml` beside the weights folder `out`: the policy file (kind "learned",
+    written by the registry, which reads it) by which the arena, training and serving find the
+    policy by name. Greedy by default: a clone plays SimpleAgent's most likely action, which
+    wins more often than sampling from it (docs/measurements.md)."""
+    return registry.write_policy_file(policy_file_of(out), "learned", description,
+                                      weights=f"{out.name}/{WEIGHTS_FILE}", greedy=greedy)

@@ -2,12 +2,13 @@
 connections, and error logs that cannot fill the disk.
 
 Slow clients: a socket is a file, and a process may hold only so many (`ulimit -n`, often 1024).
-Idle connections that never finish their request used to pile up until `accept()` failed, /ping
-timed out, and asyncio logged a traceback for every failed accept (61 MB a minute). Here the site
-admits at most `connection_limit` connections: a new one past it closes the oldest idle one (no
-request being answered: still sending its request, or between requests), so a stalled client
-loses its connection and a live one gets in. The read time-out that closes stalled connections
-even without new arrivals is set where the app is run (`app.start`).
+Idle connections that never finish their request would pile up until `accept()` fails, /ping
+times out, and asyncio logs a traceback for every failed accept, tens of megabytes a minute
+(docs/measurements.md). So the site admits at most `connection_limit` connections: a new one
+past it closes the oldest idle one (no request being answered: still sending its request, or
+between requests), so a stalled client loses its connection and a live one gets in. The read
+time-out that closes stalled connections even without new arrivals is set where the app is run
+(`app.start`).
 """
 
 from __future__ import annotations

@@ -101,6 +101,33 @@ def test_a_remote_policy_file_builds_an_http_agent(tmp_path):
         make_agent(path)
 
 
+def test_a_written_policy_file_reads_back_as_written(tmp_path):
+    path = tmp_path / "deep.toml"
+    description = 'search, "deeper" \\ café'
+    assert registry.write_policy_file(path, "search", description, depth=3, recall=2) == path
+    assert path.read_text(encoding="utf-8").splitlines()[0] == 'kind = "search"'
+    spec = resolve_policy(path)
+    assert (spec.kind, spec.description, dict(spec.params)) == (
+        "search", description, {"depth": 3, "recall": 2})
+    registry.write_policy_file(path, "learned", "a clone", weights="w/pi.pt", greedy=False,
+                               temperature=0.5)
+    assert registry.acting(resolve_policy(path)) == registry.Acting(False, 0.5)
+
+
+@pytest.mark.parametrize(("kind", "params", "message"), [
+    ("search", {"dept": 3}, r"unknown key 'dept' for kind 'search'"),
+    ("learned", {"weights": 3}, "weights must be a str, got 3"),
+    ("learned", {}, "kind 'learned' needs key 'weights'"),
+    ("scripted", {}, "kind 'scripted' is not one of"),
+    ("learned", {"weights": "pi.pt", "temperature": float("nan")}, "finite numbers, not nan"),
+])
+def test_a_policy_file_the_reader_would_refuse_is_not_written(tmp_path, kind, params, message):
+    path = tmp_path / "bad.toml"
+    with pytest.raises(ValueError, match=message):
+        registry.write_policy_file(path, kind, "bad", **params)
+    assert not path.exists()
+
+
 def test_each_call_builds_fresh_agents():
     first, second = make_agent("simple_jitter_action"), make_agent("simple_jitter_action")
     assert first is not second and first.inner is not second.inner
