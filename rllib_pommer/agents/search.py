@@ -11,8 +11,9 @@ bomb where it stands, its body in the way nearby) and threat scenarios (one enem
 near the agent within the tree's steps and lays a bomb there). Its score puts surviving first (a
 way out of the plain scenario, then of the pessimistic one, then of every threat scenario, then
 room to move), then the enemies it kills or leaves without a way out of the plain scenario, its
-teammate's way out, then wood its new bombs burn, power-ups it picks up and how near it comes to
-the nearest enemy (a path cost where wood counts extra, so it bombs its way through). An action
+teammate's way out, then enemies standing in the blast of its new bombs, wood those bombs burn,
+power-ups it picks up and how near it comes to the nearest enemy (a path cost where wood counts
+extra, so it bombs its way through). An action
 is worth its best leaf, a move onto a cell next to another agent the mean of that and Stop's
 (both may step there and bounce back); ties are broken by a draw from the agent's own seeded
 stream.
@@ -91,12 +92,13 @@ STEP_LIVED = 1e6
 DOOMED = -1e7  # no way out even if nobody lays another bomb
 CORNERED = -5e3  # no way out if every enemy lays a bomb where it stands now
 ROOM = 10.0  # per cell it can be on at the horizon of the pessimistic scenario, up to ROOM_CAP
-ROOM_CAP = 8
+ROOM_CAP = 4
 IN_BLAST = -50.0  # its cell burns in the plain scenario's first step; less if later
 URGENT = 4  # ... and nothing if it burns this many steps or more after the leaf
 KILL = 2e3  # per enemy dead, or without a way out of the plain scenario
 TEAMMATE_LOST = -3e3  # the teammate has no way out of the plain scenario
-WOOD_BURNT = 15.0  # per wooden cell the agent's new bombs burn that no older bomb does
+WOOD_BURNT = 30.0  # per wooden cell the agent's new bombs burn that no older bomb does
+HIT = 150.0  # per enemy standing in the blast of a bomb the agent laid in the tree
 POWER_UP = 60.0  # per power-up picked up
 HUNT = 6.0  # per unit of path cost to the nearest enemy
 WOOD_COST, BOMB_COST = 4, 2  # path cost of entering a wooden cell, a bomb's cell; others 1
@@ -209,9 +211,9 @@ def _scenario_key(agents, bombs, flames, meta):
 
 
 @njit(cache=True)
-def _wood_burnt(board, bombs, meta, me, depth):
-    """Wooden cells in the blasts of the bombs `me` laid within the tree (life above
-    9 - depth) that no other bomb's blast reaches."""
+def _fresh_blasts(board, agents, bombs, meta, me, depth, game_type):
+    """What the bombs `me` laid within the tree (life above 9 - depth) would burn: the wooden
+    cells no other bomb's blast reaches, and the cells of living enemies."""
     size = board.shape[0]
     new = np.zeros((size, size), np.uint8)
     old = np.zeros((size, size), np.uint8)
@@ -224,7 +226,12 @@ def _wood_burnt(board, bombs, meta, me, depth):
         for c in range(size):
             if new[r, c] and not old[r, c] and board[r, c] == WOOD:
                 count += 1
-    return count
+    hit = 0
+    for a in range(NUM_AGENTS):
+        if agents[a, A_ALIVE] != 0 and _is_enemy(me, a, game_type) and \
+                new[agents[a, A_ROW], agents[a, A_COL]]:
+            hit += 1
+    return count, hit
 
 
 @njit(cache=True)
@@ -318,7 +325,8 @@ def _leaf_score(lb, la, lbo, lf, li, lm, lr, root_alive, me, game_type, depth, h
             plain_fire, plain_blocked, la[a, A_ROW], la[a, A_COL], 1) == 0
         if lost:
             score += KILL if _is_enemy(me, a, game_type) else TEAMMATE_LOST
-    score += WOOD_BURNT * _wood_burnt(lb, lbo, lm, me, depth) - HUNT * min(hunt[mr, mc], 1000)
+    wood, hit = _fresh_blasts(lb, la, lbo, lm, me, depth, game_type)
+    score += WOOD_BURNT * wood + HIT * hit - HUNT * min(hunt[mr, mc], 1000)
     return score, n_cached
 
 
