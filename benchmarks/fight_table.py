@@ -33,11 +33,10 @@ from rllib_pommer.arena.match import MatchSpec, play_match
 from rllib_pommer.arena.records import (
     RECORDS_SUFFIX,
     GameRecord,
-    game_record,
+    read_records,
     summarise,
     write_records,
 )
-from rllib_pommer.game.records import read_jsonl
 from rllib_pommer.util.outputs import check_output_dir
 
 
@@ -78,10 +77,8 @@ def _kept(path: Path, spec: MatchSpec) -> list[GameRecord]:
     """The games of the cell file `path`, which must be exactly those of the match `spec`; else a
     ValueError naming the file."""
     try:
-        records = [game_record(row) for row in read_jsonl(path)]
-    except (KeyError, TypeError) as exc:
-        raise ValueError(f"{path}: not an arena records file (no {exc})") from None
-    except ValueError as exc:  # cut short, or not JSON Lines: read_jsonl names the line
+        records = read_records(path)
+    except ValueError as exc:  # cut short, not JSON Lines, not records: the reader names the file
         raise ValueError(f"{exc}; move the file aside to play the cell again") from None
     played = sorted({(cell_key(r.team), cell_key(r.vs)) for r in records})
     if played != [(cell_key(spec.team), cell_key(spec.vs))]:

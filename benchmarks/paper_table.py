@@ -22,10 +22,9 @@ import sys
 from pathlib import Path
 
 from rllib_pommer.agents.registry import resolve_policy
-from rllib_pommer.arena.records import RECORDS_SUFFIX
+from rllib_pommer.arena.records import RECORDS_SUFFIX, read_rows
 from rllib_pommer.evaluate import main as evaluate
 from rllib_pommer.util.outputs import check_output_dir
-from rllib_pommer.viz.matches import read_rows
 from rllib_pommer.viz.paper import paper_table
 
 OPPONENTS = ("static", "simple_nobomb", "simple", "simple_nobomb_action", "simple_action")

@@ -58,9 +58,8 @@ import choix
 import numpy as np
 
 from ..agents.registry import KINDS, policy_names, resolve_policy
-from ..game.records import read_jsonl
 from .match import MatchSpec
-from .records import RECORDS_SUFFIX, GameRecord, game_record, write_records
+from .records import RECORDS_SUFFIX, GameRecord, read_records, write_records
 
 RECORDS_DIR = "records"
 PLAYED_FILE = "played.json"  # in RECORDS_DIR: the games, seed and digests pairs were played with
@@ -153,10 +152,7 @@ def policy_digest(name: str) -> str:
 def _read_pair(ladder: Ladder, path: Path, pair: Pair) -> list[GameRecord]:
     """The pair's records, refused (ValueError naming the file) unless they are exactly this
     ladder's games of this pair."""
-    try:
-        records = [game_record(row) for row in read_jsonl(path)]
-    except (KeyError, TypeError) as exc:
-        raise ValueError(f"{path}: not an arena records file ({exc!r})") from None
+    records = read_records(path)
     named = {(r.team, r.vs, tuple(r.filters)) for r in records}
     if named != {(pair[0], pair[1], ())}:
         raise ValueError(f"{path}: holds {sorted(named)[:2]}, not {pair[0]} vs {pair[1]}")

@@ -1,5 +1,6 @@
 """What a match's games did, seen from team A: one record per game, the match's summary with
-95% intervals, and the records file `evaluate --records` writes and the report reads."""
+95% intervals, and the records file `evaluate --records` writes and the report, the ladder and
+the tables read: its writer (`write_records`) and its readers (`read_rows`, `read_records`)."""
 
 from __future__ import annotations
 
@@ -14,7 +15,7 @@ import numpy as np
 
 from ..game.constants import TEAM_PRESET
 from ..game.kills import deaths_by_cause, kills_of_team
-from ..game.records import JSONL_SUFFIXES, open_text
+from ..game.records import JSONL_SUFFIXES, numbered_values, open_text
 from .rates import wilson
 
 # The name ending of the record files the project's own jobs write (tables, ladder): gzipped
@@ -112,7 +113,7 @@ LIST_COLUMNS = ("seats_a", "died", "own_bomb_deaths", "bombs_laid", "filters", "
 
 
 def game_record(row: dict) -> GameRecord:
-    """A records file's row (`matches.read_rows`: list columns of a .csv are JSON text) as the
+    """A records file's row (`read_rows`: list columns of a .csv are JSON text) as the
     GameRecord it was written from."""
     fields = {k: _list_column(v) if k in LIST_COLUMNS and isinstance(v, str) else v
               for k, v in row.items()}
@@ -144,3 +145,28 @@ def write_records(path: Path, records: Sequence[GameRecord]) -> None:
     else:
         with open_text(path, "w") as f:
             f.writelines(json.dumps(row) + "\n" for row in rows)
+
+
+def read_rows(path: Path) -> list[dict]:
+    """Rows of a .jsonl, .jsonl.gz or .csv records file as written (list columns of a .csv are
+    JSON text; files of older versions may lack columns); a line that is not a JSON object is a
+    ValueError naming the file and line."""
+    if path.suffix == ".csv":
+        with open(path, newline="") as f:
+            return list(csv.DictReader(f))
+    rows = []
+    for line_no, row in numbered_values(path):
+        if not isinstance(row, dict):
+            raise ValueError(f"{path}:{line_no}: a records row is a JSON object, got "
+                             f"{type(row).__name__}")
+        rows.append(row)
+    return rows
+
+
+def read_records(path: Path) -> list[GameRecord]:
+    """The GameRecords of a records file (`read_rows`); a row without a column every record has
+    (or with one no record has) is a ValueError naming the file."""
+    try:
+        return [game_record(row) for row in read_rows(path)]
+    except (KeyError, TypeError) as exc:
+        raise ValueError(f"{path}: not an arena records file (no {exc})") from None

@@ -11,8 +11,8 @@ from __future__ import annotations
 from collections.abc import Iterable
 from pathlib import Path
 
-from ..arena.records import game_record, summarise
-from .matches import VARIANTS, Match, match_of, read_rows
+from ..arena.records import game_record, read_rows, summarise
+from .matches import VARIANTS, Match, match_of
 from .paper import PAPER_OPPONENTS
 
 NEEDED = frozenset({"seed", "length", "died", "own_bomb_deaths", "bombs_laid"})

@@ -17,7 +17,6 @@ filters. The variant of a match is its filter set in the paper's column names: `
 
 from __future__ import annotations
 
-import csv
 import json
 from collections.abc import Iterable
 from dataclasses import dataclass, field
@@ -25,8 +24,8 @@ from pathlib import Path
 
 from ..agents.registry import FILTER_SUFFIXES, FILTERS
 from ..arena.rates import wilson
-from ..arena.records import KILL_COUNTS, game_record
-from ..game.records import name_stem, numbered_values
+from ..arena.records import KILL_COUNTS, game_record, read_rows
+from ..game.records import name_stem
 
 VARIANTS = ("vanilla", "jitter", "action", "jitter_action")
 NAME_SEPARATOR = "__vs__"
@@ -83,21 +82,6 @@ class Outcomes:
             for key, value in counts.items():
                 self.kill_sums[key] += value
             self.bombs_a += sum(record.bombs_laid[s] for s in record.seats_a)
-
-
-def read_rows(path: Path) -> list[dict]:
-    """Rows of a .jsonl, .jsonl.gz or .csv records file (list columns of a .csv are JSON text);
-    a line that is not a JSON object is a ValueError naming the file and line."""
-    if path.suffix == ".csv":
-        with open(path, newline="") as f:
-            return list(csv.DictReader(f))
-    rows = []
-    for line_no, row in numbered_values(path):
-        if not isinstance(row, dict):
-            raise ValueError(f"{path}:{line_no}: a records row is a JSON object, got "
-                             f"{type(row).__name__}")
-        rows.append(row)
-    return rows
 
 
 def variant_of(team: str, filters: Iterable[str]) -> tuple[str, str]:
