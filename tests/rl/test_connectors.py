@@ -9,13 +9,7 @@ from rllib_pommer.agents.registry import make_agent
 from rllib_pommer.envs.team import MultiAgentTeam
 from rllib_pommer.rl.connectors import EpisodeFilters, fixed_filter_flags
 
-
-def layers(agent):
-    names = [type(agent).__name__]
-    while hasattr(agent, "inner"):
-        agent = agent.inner
-        names.append(type(agent).__name__)
-    return names
+from ..agents.test_registry import layers
 
 
 @pytest.fixture(scope="module")
