@@ -106,28 +106,9 @@ class Curriculum:
     max_steps: int
     ppo: PPOSettings
     league: LeagueSettings | None = None  # self-play snapshot slots and their gate
-
-    @property
-    def description(self) -> str:
-        """The file's `description`, read again from it: a field would change the pickled
-        Curriculum that a run under way restores (Tune keeps it in the run's config)."""
-        with self.path.open("rb") as f:
-            return tomllib.load(f).get("description", "")
-
-    @property
-    def vf_weights(self) -> Path | None:
-        """The file's `vf_weights` (a value network's state_dict, relative to the file), read
-        again from it as `description` is; None: vf starts from random weights."""
-        with self.path.open("rb") as f:
-            name = tomllib.load(f).get("vf_weights")
-        return (self.path.parent / name).resolve() if name else None
-
-    @property
-    def game(self) -> str:
-        """The file's `game` (`TEAM_GAMES`: "team", the default, or "radio", TeamRadio, where the
-        learner also speaks), read again from it as `description` is."""
-        with self.path.open("rb") as f:
-            return tomllib.load(f).get("game", "team")
+    description: str = ""
+    vf_weights: Path | None = None  # a value network's state_dict; None: vf starts at random
+    game: str = "team"  # `TEAM_GAMES`: "team", or "radio" (TeamRadio: the learner also speaks)
 
     @property
     def total_episodes(self) -> int:
@@ -336,6 +317,10 @@ def load_curriculum(name_or_path: str | Path) -> Curriculum:
         max_steps=data.get("max_steps", TEAM_PRESET.max_steps),
         ppo=PPOSettings.from_options(ppo),
         league=None if league is None else LeagueSettings.from_options(league),
+        description=data.get("description", ""),
+        vf_weights=(path.parent / data["vf_weights"]).resolve() if data.get("vf_weights")
+        else None,
+        game=data.get("game", "team"),
     )
 
 
@@ -343,8 +328,8 @@ def load_curriculum(name_or_path: str | Path) -> Curriculum:
 # a shipped one by its name (the run may move to another clone), another by its file's path.
 RUN_CURRICULUM_FILE = "curriculum.json"
 DEFAULT_CURRICULUM = "quick"
-# How a trial's params.json names its curriculum (the repr of rl/config.py's CurriculumCallback
-# partial): a run started before runs noted theirs is read from there.
+# How a trial's params.json names its curriculum (the repr of the curriculum callback's partial
+# in the config of runs started before runs noted theirs): such a run is read from there.
 CURRICULUM_IN_PARAMS = re.compile(r"Curriculum\(name='([^']+)', path=\w*Path\('([^']+)'\)")
 
 

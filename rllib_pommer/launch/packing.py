@@ -12,7 +12,6 @@ checkpoint: it asks the run's driver through a file in the run folder (`STOP_REQ
 
 from __future__ import annotations
 
-import json
 import os
 import shutil
 import signal
@@ -26,7 +25,7 @@ from ..runs.checkpoints import (
     checkpoint_iteration,
     trial_dirs,
 )
-from ..runs.history import HISTORY_FILE, read_trial, write_summary
+from ..runs.history import HISTORY_FILE, number, read_rows, read_trial, write_summary
 from . import ray_session
 
 STOP_REQUEST = "stop_request"  # in the run folder: `stop_run` asks the driver to stop
@@ -100,8 +99,9 @@ def _lost(checkpoint: Path) -> str:
     """What the report adds when the trial logged iterations after `checkpoint`: those are in
     no checkpoint, and `--resume` goes on from the checkpoint."""
     iteration = checkpoint_iteration(checkpoint)
-    last = max((row["training_iteration"] for _, row in _results(checkpoint.parent / "result.json")
-                if isinstance(row.get("training_iteration"), int)), default=iteration)
+    logged = [number(row.get("training_iteration"))
+              for row in read_rows(checkpoint.parent, whole_run=False)]
+    last = int(max((n for n in logged if n == n), default=iteration))
     if last <= iteration:
         return ""
     after = f"iteration {last}" if last == iteration + 1 else f"iterations {iteration + 1}-{last}"
@@ -159,16 +159,3 @@ def pack_run(out: Path) -> Path | None:
         for stale in out.glob(pattern):
             stale.unlink()
     return kept
-
-
-def _results(path: Path) -> list[tuple[str, dict]]:
-    """result.json's lines with what they hold; a line cut short (a killed write) is left out."""
-    if not path.is_file():
-        return []
-    parsed = []
-    for line in path.read_text().splitlines():
-        try:
-            parsed.append((line, json.loads(line)))
-        except json.JSONDecodeError:
-            continue
-    return parsed

@@ -20,9 +20,9 @@ override:
 Layout (`train --num-env-runners N --torch-threads T`, not PPO's arithmetic): by default the
 algorithm's process samples and learns on one thread, so two runs share a 2-core machine, one per
 core, the most work per hour when there are several runs to do; a run alone on 2 cores goes
-faster with 2 remote env runners and 2 learner threads (`bench layout` compares them). Tune
-restores a trial with the config it started with, so a resumed run keeps its number of env
-runners (training.kept_layouts says so); the learner's threads are the command's.
+faster with 2 remote env runners and 2 learner threads (`bench layout` compares them). A
+resumed run is built afresh from its data (launch/training.py), so it takes the layout its
+command asks for.
 
 Speed settings, none of which changes what PPO computes:
 
@@ -93,13 +93,13 @@ def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None
     object of ours the config holds is built from plain data by a class on the map's list of
     stable import paths (docs/architecture.md), which is all a run's saved config names."""
     restoring = restore_from is not None
-    radio = curriculum.game == "radio"  # a property that parses the file: read it once
+    radio = curriculum.game == "radio"
     weights = Path(pi_weights) if pi_weights else curriculum.pi_weights
     weights = weights.resolve() if restoring else check_weights(weights, radio=radio)
     first = curriculum.stages[0]
     ppo = curriculum.ppo
     model_config = {"pi_weights": str(weights)}
-    vf_weights = curriculum.vf_weights  # a property that parses the file: read it once
+    vf_weights = curriculum.vf_weights
     if vf_weights:  # only then: a run under way resumes with the keys it started with
         model_config["vf_weights"] = str(vf_weights if restoring else check_weights(
             vf_weights, part="vf", radio=radio))

@@ -54,7 +54,7 @@ def _run_curriculum(trial: Path) -> Curriculum:
     curriculum = run_curriculum(trial.parent)
     if curriculum is None:
         raise ValueError(f"{trial / 'params.json'}: names no curriculum (a run of `python -m "
-                         f"rllib_pommer.train` records its CurriculumCallback there)")
+                         f"rllib_pommer.train` notes it in curriculum.json)")
     return curriculum
 
 
