@@ -190,3 +190,13 @@ def test_an_enemy_that_can_walk_up_and_trap_the_agent_is_a_threat():
     trapped = [escape_cells(fire[k], blocked[k], 5, 0, 1) == 0 for k in range(near)]
     assert near > 0 and any(trapped) and not all(trapped)
     assert _record_threats(*corridor(10), ME, game_type, 2, home, fire, blocked) == 0
+
+
+def test_a_bomb_whose_blast_covers_an_enemy_is_worth_laying():
+    """On open ground, with an enemy next to it, laying a bomb now (then stepping out of its
+    blast) is worth more than stepping away from the enemy first, whose bomb would miss it; with
+    the enemy far away, bombing is worth no more than any move."""
+    near = _values(_open_state({ME: (5, 5), 1: (5, 6)}))
+    assert near[Action.BOMB] >= near[Action.UP] + 100
+    far = _values(_open_state({ME: (5, 5), 1: (0, 10)}))
+    assert far[Action.BOMB] == far[Action.UP] == far[Action.STOP]
