@@ -3,7 +3,6 @@ opponent's outcomes logged apart; mappings pickled before leagues still map."""
 
 from __future__ import annotations
 
-import pickle
 from collections import Counter
 from types import SimpleNamespace
 
@@ -50,15 +49,6 @@ def test_a_league_takes_turns_so_each_opponent_meets_every_seat_alike():
     assert [name for _, name in played[:8]] == ["static"] * 4 + ["simple"] * 4
     assert set(_seats_and_opponents(SeatMapping(0, "suicide", "simple"), 8)) == {
         (seat, "simple") for seat in range(4)}
-
-
-def test_a_mapping_pickled_before_leagues_maps_as_it_did(committed_campaign):
-    """The committed campaign's params.pkl holds a SeatMapping from before leagues."""
-    trial = next(committed_campaign.glob("PPO_*"))
-    with (trial / "params.pkl").open("rb") as f:
-        mapping = pickle.load(f)["policy_mapping_fn"]
-    assert (mapping.stage, mapping.teammate, mapping.opponent) == (0, "suicide", "simple")
-    assert _seats_and_opponents(mapping, 5) == [(n % 4, "simple") for n in range(5)]
 
 
 def test_a_league_loads_as_a_tuple_and_its_members_are_checked(tmp_path):

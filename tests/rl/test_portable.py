@@ -1,8 +1,8 @@
 """A checkpoint is self-contained: the committed campaign's checkpoint, made before this was so,
-restores (module alone and whole algorithm, with its pickled curriculum callback, seat mapping and
-fixed modules, all stored by import path) where the imitation weights file it names no longer
-exists, and plays episodes. (A packed run moved, resumed and played without its weights file:
-test_resume.py.)"""
+restores (the module alone by RLlib's `from_checkpoint`, and the whole algorithm as a resume
+builds it: from the curriculum's data, loading the checkpoint's state) where the imitation
+weights file it names no longer exists, and plays episodes. (A packed run moved, resumed and
+played without its weights file: test_resume.py.)"""
 
 from __future__ import annotations
 
@@ -23,19 +23,21 @@ RESTORE = """
 import json, sys
 from pathlib import Path
 import ray, torch
-from ray.rllib.algorithms.algorithm import Algorithm
 from ray.rllib.core.rl_module.rl_module import RLModule
+from rllib_pommer.curriculum.curriculum import load_curriculum
+from rllib_pommer.rl.config import build_config
 from rllib_pommer.runs.checkpoints import load_checkpoint_net
 from ray.rllib.utils.metrics import ENV_RUNNER_RESULTS, NUM_EPISODES_LIFETIME
 from rllib_pommer.curriculum.names import LEARNER
 
-checkpoint, weights = Path(sys.argv[1]), Path(sys.argv[2])
+checkpoint, weights, curriculum = Path(sys.argv[1]), Path(sys.argv[2]), sys.argv[3]
 expected = load_checkpoint_net(checkpoint).state_dict()
 same = lambda pi: all(torch.equal(pi.state_dict()[k], v) for k, v in expected.items())
 module = RLModule.from_checkpoint(checkpoint / "learner_group/learner/rl_module/learner")
 ray.init(address="local", num_cpus=2, include_dashboard=False)
 try:
-    algo = Algorithm.from_checkpoint(str(checkpoint))  # no Tune: the stage must follow anyway
+    # no Tune: the stage must follow anyway
+    algo = build_config(load_curriculum(curriculum), restore_from=checkpoint).build_algo()
     learner = algo.learner_group._learner.module[LEARNER]
     print(json.dumps({
         "weights_visible": weights.exists(), "module_pi": same(module.pi),
@@ -71,8 +73,8 @@ def test_the_committed_campaign_checkpoint_restores_without_its_weights_file(
     named = re.search(r"'pi_weights': '([^']+)'", (trial / "params.json").read_text())
     weights = Path(named.group(1))  # the absolute path the run was built with
     done = subprocess.run([*_hiding(weights), sys.executable, "-c", RESTORE, str(checkpoint),
-                           str(weights)], cwd=tmp_path, capture_output=True, text=True,
-                          timeout=600)
+                           str(weights), CURRICULUM], cwd=tmp_path, capture_output=True,
+                          text=True, timeout=600)
     assert done.returncode == 0, done.stderr[-3000:]
     seen = json.loads(done.stdout.strip().splitlines()[-1])
     # the campaign moves on between commits: the stage in force is the one its curriculum gives
@@ -82,7 +84,7 @@ def test_the_committed_campaign_checkpoint_restores_without_its_weights_file(
     assert seen == {"weights_visible": False, "module_pi": True, "module_source": "checkpoint",
                     "algo_pi": True, "algo_source": "checkpoint",
                     "pi_frozen": stage.freeze_pi, "mapping_stage": index,
-                    # and it plays: its scripted modules, restored by their import paths
+                    # and it plays its scripted modules
                     "played": sorted({"learner", stage.teammate, stage.opponent})}
 
 

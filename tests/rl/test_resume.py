@@ -71,12 +71,14 @@ def _hex_pickles(value):
                 yield from _hex_pickles(json.loads(value))
 
 
-def pickled_classes(run: Path) -> set[str]:
+def pickled_classes(run: Path, trials: list[Path] | None = None) -> set[str]:
     """Every class of ours named by what Tune and RLlib pickled into the run folder `run`: its
-    Tune state, its trials' params.pkl and its checkpoints' class_and_ctor_args.pkl."""
+    Tune state, and its `trials`' (default: all) params.pkl and checkpoints'
+    class_and_ctor_args.pkl."""
     seen: set[str] = set()
-    files = [*run.glob("tuner.pkl"), *run.glob("*/params.pkl"),
-             *run.glob("**/class_and_ctor_args.pkl")]
+    trials = list(run.glob("PPO_*")) if trials is None else trials
+    files = [*run.glob("tuner.pkl"), *(p for t in trials for p in t.glob("params.pkl")),
+             *(p for t in trials for p in t.glob("**/class_and_ctor_args.pkl"))]
     for path in files:
         _Recording(path.read_bytes(), seen).load()
     for state in run.glob("experiment_state-*.json"):
@@ -277,8 +279,8 @@ def test_a_packed_run_resumes_at_another_path(tmp_path, pi_weights):
 def test_a_campaign_packed_before_runs_resumed_from_data_resumes(tmp_path):
     """A committed campaign packed when runs still resumed through Tune's pickled state (its
     `tuner.pkl` and `params.pkl` name modules that have since moved): `--resume` reads none of
-    that, goes on from its checkpoint in a new leg (the run had finished: one iteration), and the
-    run's history reads as one."""
+    that and goes on from its checkpoint in a new leg; `--stop` ends it after an iteration, and
+    the run's history reads as one."""
     campaign = REPO / "campaign" / "no_curriculum"
     if not (campaign / "tuner.pkl").is_file():
         pytest.skip("the campaign packed before the change is not in this checkout")
@@ -288,17 +290,31 @@ def test_a_campaign_packed_before_runs_resumed_from_data_resumes(tmp_path):
     (checkpoint,) = old.glob("checkpoint_*")
     iteration = checkpoint_iteration(checkpoint)
     before = read_rows(old)
-    resumed = subprocess.run([sys.executable, "-m", "rllib_pommer.train", "--out", str(run),
-                              "--resume"], cwd=tmp_path, capture_output=True, text=True,
-                             timeout=600)
-    assert resumed.returncode == 0, resumed.stderr[-3000:]
+    log = tmp_path / "resumed.log"
+    with open(log, "wb") as out:
+        process = subprocess.Popen([sys.executable, "-m", "rllib_pommer.train", "--out",
+                                    str(run), "--resume"], cwd=tmp_path, stdout=out,
+                                   stderr=subprocess.STDOUT, start_new_session=True)
+    try:
+        _wait_for(lambda: any(p != old and (p / "result.json").is_file()
+                              and (p / "result.json").read_text().strip()
+                              for p in run.glob("PPO_*")), process, 300,
+                  "an iteration after the resume")
+        stop = subprocess.run([sys.executable, "-m", "rllib_pommer.train", "--out", str(run),
+                               "--stop"], cwd=tmp_path, capture_output=True, text=True,
+                              timeout=300)
+        assert stop.returncode == 0, stop.stderr[-2000:]
+        assert process.wait(timeout=60) == 130, log.read_text()[-3000:]
+    finally:
+        if process.poll() is None:
+            _interrupt(process)
     leg = _newest_leg(run)
     assert legs(leg) == [old, leg]
     rows = read_rows(leg)
-    assert rows[: len(before)] == before
+    assert [_iteration(r) for r in rows[: len(before)]] == [_iteration(r) for r in before]
     first = rows[len(before)]
     assert _iteration(first) == iteration + 1
     assert (first["env_runners/num_episodes_lifetime"] - first["env_runners/num_episodes"]
             == int(float(before[-1]["env_runners/num_episodes_lifetime"])))
-    named = pickled_classes(run)
+    named = pickled_classes(run, [leg])  # the old leg's checkpoint stays until the next pack
     assert named <= stable_paths(), sorted(named - stable_paths())
