@@ -9,7 +9,9 @@ Ray prints them when a run starts, before any progress line, and none asks anyth
 - "`RLModule(config=[RLModuleConfig object])` has been deprecated": RLlib's own `RLModule.__init__`
   builds that object for old custom models; our modules never pass one;
 - "Install gputil for GPU system monitoring": Tune's monitor, on CPU-only machines;
-- "Trainable.setup took N seconds ... reuse_actors": a hint for many trials; a run is one trial.
+- "Trainable.setup took N seconds ... reuse_actors": a hint for many trials; a run is one trial;
+- "Experiment has been interrupted ... Resume experiment with: Tuner.restore(...)": a run resumes
+  from its data with `train --resume` (training.py), which the job's own last line names.
 
 Every other warning passes. `silence` runs in the driver (`training.init_ray`) and, as Ray's
 `worker_process_setup_hook`, in every Ray worker process, where the algorithm logs its own copy.
@@ -27,6 +29,7 @@ NOISE = {
     "ray._common.deprecation": "RLModule(config=[RLModuleConfig object])",
     "ray.tune.utils.util": "Install gputil",
     "ray.tune.trainable.trainable": "consider setting reuse_actors=True",
+    "ray.tune.tune": "Resume experiment with: Tuner.restore",
 }
 
 
