@@ -251,12 +251,13 @@ def _records(algorithm) -> dict[str, Record]:
     return on_learner(algorithm, lambda learner: learner.module[MATCHMAKING_MODULE].records())
 
 
-def league_members(algorithm, curriculum) -> tuple[str, ...]:
+def filled_slots(algorithm, curriculum) -> tuple[str, ...]:
     """The filled snapshot slots of `curriculum`'s league (none without a league)."""
     return members(_book(algorithm, curriculum.league)) if curriculum.league else ()
 
 
-def _exploiter(curriculum) -> tuple[str, ...]:
+def exploiter_of(curriculum) -> tuple[str, ...]:
+    """The league's exploiter module, if `curriculum`'s league has one."""
     league = curriculum.league
     return (EXPLOITER,) if league is not None and league.exploiter else ()
 
@@ -273,7 +274,7 @@ def league_opponent(algorithm, curriculum, stage):
     the exploiter and the filled snapshot slots."""
     if not stage.self_play:
         return stage.opponent
-    return (*stage.opponents, *_exploiter(curriculum), *league_members(algorithm, curriculum))
+    return (*stage.opponents, *exploiter_of(curriculum), *filled_slots(algorithm, curriculum))
 
 
 def _priorities(curriculum, records: dict, opponent: tuple[str, ...]) -> list[float]:

@@ -33,8 +33,15 @@ from ray.tune.result import SHOULD_CHECKPOINT
 
 from ..curriculum.curriculum import load_curriculum
 from ..curriculum.mapping import SeatMapping
-from ..curriculum.names import EXPLOITER, LEARNER
-from .league import count, league_members, league_opponent, league_weights, push_modules
+from ..curriculum.names import LEARNER
+from .league import (
+    count,
+    exploiter_of,
+    filled_slots,
+    league_opponent,
+    league_weights,
+    push_modules,
+)
 
 
 def _push_stage(env_runner, mapping: SeatMapping, env_settings: dict) -> None:
@@ -63,10 +70,6 @@ class StageCallback(RLlibCallback):
         self.curriculum = load_curriculum(curriculum)
         self.restore_from = restore_from
 
-    def _trained(self) -> tuple[str, ...]:
-        league = self.curriculum.league
-        return (LEARNER, EXPLOITER) if league is not None and league.exploiter else (LEARNER,)
-
     def apply_stage(self, algorithm, episodes: int) -> int:
         index = self.curriculum.stage_at(episodes)
         stage = self.curriculum.stages[index]
@@ -77,7 +80,7 @@ class StageCallback(RLlibCallback):
                         "jitter": stage.jitter}
         algorithm.env_runner_group.foreach_env_runner(
             lambda runner: _push_stage(runner, mapping, env_settings), local_env_runner=True)
-        for module_id in self._trained():
+        for module_id in (LEARNER, *exploiter_of(self.curriculum)):
             algorithm.learner_group.foreach_learner(
                 lambda learner, module_id=module_id:
                 learner.module[module_id].set_pi_frozen(stage.freeze_pi))
@@ -92,7 +95,7 @@ class StageCallback(RLlibCallback):
 
         def set_state_and_stage(state):
             set_state(state)
-            push_modules(algorithm, league_members(algorithm, self.curriculum))
+            push_modules(algorithm, filled_slots(algorithm, self.curriculum))
             self.apply_stage(algorithm, lifetime_episodes(algorithm))
         algorithm.set_state = set_state_and_stage
         if self.restore_from:
