@@ -369,6 +369,7 @@ def root_values(board, agents, bombs, flames, items, meta, radio, me, game_type,
     rewards = np.zeros(NUM_AGENTS, np.int64)
     burn = np.zeros((size, size), np.uint8)
     killers = np.zeros(NUM_AGENTS, np.uint8)
+    laid = np.zeros(NUM_AGENTS, np.int64)
     value = np.full(NUM_ACTIONS, -np.inf)
     chosen = np.full(levels, -1, np.int64)
     level = 0
@@ -390,7 +391,7 @@ def root_values(board, agents, bombs, flames, items, meta, radio, me, game_type,
         lr[nxt] = lr[level]
         actions[me] = action
         step_game(lb[nxt], la[nxt], lbo[nxt], lf[nxt], li[nxt], lm[nxt], lr[nxt], actions, words,
-                  rewards, TEAM_GAME, 1 << 30, BLAST_CAP, burn, killers)
+                  rewards, TEAM_GAME, 1 << 30, BLAST_CAP, burn, killers, laid)
         r, c = la[nxt, me, A_ROW], la[nxt, me, A_COL]
         picked = EXTRA_BOMB <= lb[level, r, c] <= KICK and la[nxt, me, A_ALIVE] != 0
         gain[nxt] = gain[level] + (POWER_UP if picked else 0.0)

@@ -83,11 +83,12 @@ def play_scenario(board, agents, bombs, flames, items, meta, radio, me, bombers,
     rewards = np.zeros(NUM_AGENTS, np.int64)
     burn = np.zeros((size, size), np.uint8)
     killers = np.zeros(NUM_AGENTS, np.uint8)
+    laid = np.zeros(NUM_AGENTS, np.int64)
     for t in range(fire.shape[0]):
         for a in range(NUM_AGENTS):
             actions[a] = BOMB_ACTION if t == 0 and bombers[a] else STOP
         step_game(s_board, s_agents, s_bombs, s_flames, s_items, s_meta, s_radio, actions, words,
-                  rewards, 2, 1 << 30, 4, burn, killers)
+                  rewards, 2, 1 << 30, 4, burn, killers, laid)
         for r in range(size):
             for c in range(size):
                 code = s_board[r, c]

@@ -27,24 +27,12 @@ import numpy as np
 from ..agents.base import innermost
 from ..agents.registry import make_agent, resolve_policy
 from ..agents.speaker import as_passed, radio_act
-from ..game.blast import mark_blast
-from ..game.constants import RADIO_NUM_WORDS, Action, GameConfig, has_radio, has_teams, preset
+from ..game.constants import RADIO_NUM_WORDS, GameConfig, has_radio, has_teams, preset
 from ..game.engine import Games
-from ..game.kills import killer_seats
+from ..game.kills import death_cause, killer_seats
 from ..game.records import GameRecorder
 from ..game.seeding import game_seeds
-from ..game.state import (
-    A_ALIVE,
-    A_AMMO,
-    A_COL,
-    A_ROW,
-    B_BLAST,
-    B_COL,
-    B_LIFE,
-    B_OWNER,
-    B_ROW,
-    M_BOMBS,
-)
+from ..game.state import A_ALIVE
 from ..util.parallel import map_unordered
 from .records import GameRecord
 
@@ -88,27 +76,6 @@ def _build_players(spec: MatchSpec, seats_a: tuple[int, int]) -> list:
             for s in range(4)]
 
 
-def _exploded_bombs(before: np.ndarray, after: np.ndarray) -> np.ndarray:
-    """Rows of `before` that went off this step. An owner lays at most one bomb per step, so
-    (owner, life) names a bomb: it survived iff (owner, life - 1) is still listed."""
-    survivors = {(int(b[B_OWNER]), int(b[B_LIFE])) for b in after}
-    gone = [b[B_LIFE] <= 1 or (int(b[B_OWNER]), int(b[B_LIFE]) - 1) not in survivors
-            for b in before]
-    return before[np.asarray(gone, bool)] if len(before) else before
-
-
-def _killed_by_own_bomb(seat: int, cell: tuple[int, int], board: np.ndarray,
-                        exploded: np.ndarray) -> bool:
-    """The reference statistics' rule: one of the seat's bombs exploded this step and its cross
-    (on the pre-step board) covers the death cell."""
-    for bomb in exploded[exploded[:, B_OWNER] == seat]:
-        cross = np.zeros_like(board)
-        mark_blast(board, cross, bomb[B_ROW], bomb[B_COL], bomb[B_BLAST])
-        if cross[cell]:
-            return True
-    return False
-
-
 def _loaded(module: str):
     """The module `module` if this process has loaded it, else None. Learned agents come from
     the registry's plugin kinds, whose modules (and torch) load when the first one is built: a
@@ -134,38 +101,6 @@ def _prefetch_learned(players: list[list], obs, active: np.ndarray,
     for policy, agents, rows in groups.values():
         index = tuple(np.array(rows).T)
         policy.prefetch(agents, obs.select(*index), None if message is None else message[index])
-
-
-class _GameStats:
-    """Per-game counters of one chunk, updated around every step."""
-
-    def __init__(self, n: int):
-        self.bombs_laid = np.zeros((n, 4), np.int64)
-        self.own_bomb_deaths = np.zeros((n, 4), bool)
-        self.length = np.zeros(n, np.int64)
-
-    def before_step(self, state, active: np.ndarray, actions: np.ndarray) -> list:
-        """Count bomb layings (the reference's rule) and keep what death checks need."""
-        kept = []
-        for g in range(active.shape[0]):
-            bombs = state.bombs[g, : state.meta[g, M_BOMBS]].copy()
-            for s in np.flatnonzero(active[g] & (actions[g] == Action.BOMB)):
-                r, c = state.agents[g, s, A_ROW], state.agents[g, s, A_COL]
-                on_bomb = ((bombs[:, B_ROW] == r) & (bombs[:, B_COL] == c)).any()
-                if state.agents[g, s, A_AMMO] > 0 and not on_bomb:
-                    self.bombs_laid[g, s] += 1
-            kept.append((state.board[g].copy(), bombs))
-        return kept
-
-    def after_step(self, state, active: np.ndarray, kept: list) -> None:
-        self.length += active.any(axis=1)
-        died = active & (state.agents[:, :, A_ALIVE] == 0)
-        for g in np.flatnonzero(died.any(axis=1)):
-            board, bombs = kept[g]
-            exploded = _exploded_bombs(bombs, state.bombs[g, : state.meta[g, M_BOMBS]])
-            for s in np.flatnonzero(died[g]):
-                cell = (state.agents[g, s, A_ROW], state.agents[g, s, A_COL])
-                self.own_bomb_deaths[g, s] = _killed_by_own_bomb(s, cell, board, exploded)
 
 
 def _play_chunk(spec: MatchSpec, games: Sequence[int],
@@ -194,7 +129,7 @@ def _play_chunk(spec: MatchSpec, games: Sequence[int],
                                        filters=list(spec.filters),
                                        seats_a=list(seats_of_team_a(spec, g)))
             recorders[i].start()
-    stats = _GameStats(n)
+    lengths = np.zeros(n, np.int64)  # steps each game lasted
     state = engine.state
     while not engine.done.all():
         active = engine.alive & ~engine.done[:, None]
@@ -209,9 +144,8 @@ def _play_chunk(spec: MatchSpec, games: Sequence[int],
             else:
                 actions[g, s] = players[g][s].act(obs.select(g, s))
         was_done = engine.done.copy()
-        kept = stats.before_step(state, active, actions)
         engine.step(np.concatenate([actions[..., None], words], axis=-1) if radio else actions)
-        stats.after_step(state, active, kept)
+        lengths += active.any(axis=1)
         for i, recorder in recorders.items():
             if not was_done[i]:
                 recorder.step(_as_passed(players[i], active[i], actions[i], words[i]) if radio
@@ -221,10 +155,12 @@ def _play_chunk(spec: MatchSpec, games: Sequence[int],
         seats_a = seats_of_team_a(spec, g)
         winners = [s for s in range(4) if engine.rewards[i, s] == 1]
         result = "tie" if not winners else ("win" if seats_a[0] in winners else "loss")
+        died = (state.agents[i, :, A_ALIVE] == 0).tolist()
         records.append(GameRecord(
-            g, spec.seed, list(seats_a), result, int(stats.length[i]),
-            (state.agents[i, :, A_ALIVE] == 0).tolist(), stats.own_bomb_deaths[i].tolist(),
-            stats.bombs_laid[i].tolist(), spec.team, spec.vs, list(spec.filters),
+            g, spec.seed, list(seats_a), result, int(lengths[i]), died,
+            [dead and death_cause(s, engine.killers[i, s]) == "self"
+             for s, dead in enumerate(died)],
+            engine.laid[i].tolist(), spec.team, spec.vs, list(spec.filters),
             [killer_seats(mask) for mask in engine.killers[i]], spec.variant))
     return records, [recorders[i].finish() for i in sorted(recorders)]
 

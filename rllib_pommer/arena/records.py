@@ -35,8 +35,8 @@ class GameRecord:
     result: str  # "win", "loss" or "tie" for team A
     length: int
     died: list[bool]  # by seat
-    own_bomb_deaths: list[bool]  # by seat
-    bombs_laid: list[int]  # by seat
+    own_bomb_deaths: list[bool]  # by seat: died in fire its own bomb was part of (engine credit)
+    bombs_laid: list[int]  # by seat, as the engine counts them
     # The match, so a records file names what it holds (the report reads it from the rows).
     team: str = ""
     vs: str = ""

@@ -12,9 +12,10 @@ which pay only the kills credited to the agent's team; "raw_kills_clock", which 
 clock) decides the reward at an agent's last step and, for "raw_kills", on the steps its team
 kills (and for "raw_kills_clock" on every step).
 
-The final infos carry `winners` (seats, empty on a tie), `died` and `killers` (every seat's
-kill-credit mask, `game/kills.py`), so callbacks can log the true outcome and who killed whom
-whatever the reward mode. Each reset also draws, from the env's seeded stream, whether the learner's
+The final infos carry `winners` (seats, empty on a tie), `died`, `killers` (every seat's
+kill-credit mask, `game/kills.py`) and `laid` (the bombs each seat laid, as the engine counts
+them), so callbacks can log the true outcome, who killed whom and who bombed whatever the reward
+mode. Each reset also draws, from the env's seeded stream, whether the learner's
 action filter and jitter correction are on for the episode (`filters` in every info), so the
 episode's filters replay with its seed. `set_stage` changes reward mode and filter probabilities.
 
@@ -238,7 +239,8 @@ class MultiAgentTeam:
                 self.reward_mode, step, max_steps, leaves, agent in winners)
             if done:
                 infos[agent].update(winners=info.get("winners", []), killers=killers,
-                                    died=(~alive).tolist())
+                                    died=(~alive).tolist(),
+                                    laid=self.game.batch.laid[0].tolist())
             if not leaves:
                 self.agents.append(agent)
         terminateds["__all__"] = done

@@ -57,8 +57,8 @@ def _first_out_of_range(actions, bounds):
 
 @njit(cache=True)
 def _step_batch(board, agents, bombs, flames, items, meta, radio, actions, rewards, results, burn,
-                killers, game_type, max_steps, blast_cap, view_radius, o_board, o_blast, o_life,
-                o_dir, o_flame, o_pos, o_ammo, o_strength, o_kick, o_alive, o_type, o_step):
+                killers, laid, game_type, max_steps, blast_cap, view_radius, o_board, o_blast,
+                o_life, o_dir, o_flame, o_pos, o_ammo, o_strength, o_kick, o_alive, o_type, o_step):
     """Step every game that is not done yet and observe it; done games are left untouched.
 
     `actions` are (N, 4) moves, or (N, 4, 3) [move, word, word] (numba compiles each form
@@ -79,7 +79,7 @@ def _step_batch(board, agents, bombs, flames, items, meta, radio, actions, rewar
             game_moves = actions[n]
         results[n] = step_game(board[n], agents[n], bombs[n], flames[n], items[n], meta[n],
                                radio[n], game_moves, words, rewards[n], game_type, max_steps,
-                               blast_cap, burn[n], killers[n])
+                               blast_cap, burn[n], killers[n], laid[n])
         observe_game(board[n], agents[n], bombs[n], flames[n], meta[n], view_radius, game_type,
                      o_board[n], o_blast[n], o_life[n], o_dir[n], o_flame[n], o_pos[n],
                      o_ammo[n], o_strength[n], o_kick[n], o_alive[n], o_type[n], o_step[n])
@@ -162,7 +162,8 @@ class Games:
     Beside the state the engine keeps who killed whom (`game/kills.py`): `killers` (N, 4), for
     each dead agent the bit mask of the agents whose fire it died in (0 while alive, or when the
     fire predates a loaded state), and `burn` (N, S, S), the same credit for the fire on each
-    cell. Neither is part of the reference's state, so neither is serialized or compared.
+    cell. It also counts the bombs each agent laid in the game, `laid` (N, 4). None of these is
+    part of the reference's state, so none is serialized or compared.
     """
 
     def __init__(self, num_games: int, config: GameConfig = TEAM_PRESET):
@@ -176,6 +177,7 @@ class Games:
         self.results = np.full(num_games, int(Result.INCOMPLETE), np.int64)
         self.burn = np.zeros((num_games, config.board_size, config.board_size), np.uint8)
         self.killers = np.zeros((num_games, NUM_AGENTS), np.uint8)
+        self.laid = np.zeros((num_games, NUM_AGENTS), np.int64)
 
     @property
     def num_games(self) -> int:
@@ -216,6 +218,7 @@ class Games:
         self.results[index] = Result.INCOMPLETE
         self.burn[index] = 0
         self.killers[index] = 0
+        self.laid[index] = 0
 
     def dump(self, index: int) -> dict:
         return dump_state(self.state, index, self.config.game_type)
@@ -240,8 +243,8 @@ class Games:
         acts = validate_actions(arr, self.num_games, self.radio)
         s, o, c = self.state, self.obs, self.config
         _step_batch(s.board, s.agents, s.bombs, s.flames, s.items, s.meta, s.radio, acts,
-                    self.rewards, self.results, self.burn, self.killers, int(c.game_type),
-                    c.max_steps, c.blast_cap, c.view_radius, *_kernel_outputs(o))
+                    self.rewards, self.results, self.burn, self.killers, self.laid,
+                    int(c.game_type), c.max_steps, c.blast_cap, c.view_radius, *_kernel_outputs(o))
         return o, self.rewards, self.done, self.results
 
 

@@ -110,8 +110,9 @@ def _age_flames(board, flames, items, meta):
 
 
 @njit(cache=True)
-def _agent_intents(board, agents, bombs, meta, actions, want):
-    """§3.2: clear agents' cells, lay bombs, and set each living agent's wanted cell."""
+def _agent_intents(board, agents, bombs, meta, actions, want, laid):
+    """§3.2: clear agents' cells, lay bombs (counted in `laid`), and set each living agent's
+    wanted cell."""
     size = board.shape[0]
     for a in range(NUM_AGENTS):
         if agents[a, A_ALIVE] == 0:
@@ -136,6 +137,7 @@ def _agent_intents(board, agents, bombs, meta, actions, want):
                 bombs[n_bombs, B_BLAST] = agents[a, A_BLAST]
                 bombs[n_bombs, B_DIR] = 0
                 meta[M_BOMBS] = n_bombs + 1
+                laid[a] += 1
         elif action != STOP:
             tr, tc = r + ACTION_DR[action], c + ACTION_DC[action]
             if 0 <= tr < size and 0 <= tc < size and not _is_wall(board[tr, tc]):
@@ -500,7 +502,7 @@ def _score(agents, meta, game_type, max_steps, rewards):
 
 @njit(cache=True)
 def step_game(board, agents, bombs, flames, items, meta, radio, actions, words, rewards, game_type,
-              max_steps, blast_cap, burn, killers):
+              max_steps, blast_cap, burn, killers, laid):
     """Advance one game by one step in place; fill `rewards` (4,) and return the result code.
 
     `actions` (4,) are the moves and `words` (4, 2) the words sent with them, which land in
@@ -508,15 +510,16 @@ def step_game(board, agents, bombs, flames, items, meta, radio, actions, words, 
 
     `burn` (S, S) and `killers` (4,) are the kill credit kept beside the state (uint8 bit masks of
     agents, `game/kills.py`): the credit of the fire on each cell, and of the fire each dead agent
-    died in. They never feed back into the game. Dead agents' actions are ignored. The caller
-    validates actions and never steps a done game.
+    died in. `laid` (4,) counts the bombs each agent lays (a bomb action with ammo left, on a
+    cell without a bomb). None of them feeds back into the game. Dead agents' actions are
+    ignored. The caller validates actions and never steps a done game.
     """
     size = board.shape[0]
     _send_words(agents, words, radio)
     was_alive = agents[:, A_ALIVE] != 0
     _age_flames(board, flames, items, meta)
     want = np.empty((NUM_AGENTS, 2), np.int64)
-    _agent_intents(board, agents, bombs, meta, actions, want)
+    _agent_intents(board, agents, bombs, meta, actions, want, laid)
     n_bombs = meta[M_BOMBS]
     bwant = np.empty((n_bombs, 2), np.int64)
     _bomb_intents(board, bombs, n_bombs, bwant)

@@ -15,46 +15,40 @@ from __future__ import annotations
 from ray.rllib.callbacks.callbacks import RLlibCallback
 
 from ..curriculum.names import LEARNER
-from ..game.constants import Action
 from ..game.kills import deaths_by_cause, kills_of_team
-from .connectors import FILTERS_KEY, move_of
+from .connectors import FILTERS_KEY
 
 
 def learner_outcome(chunks) -> dict | None:
     """The learner's episode from its chunks, or None: `result` ("win"|"loss"|"tie" of its
     team), `return` (per learner agent, averaged where the learner is its own teammate),
     `opponent` (the opponents' module), and per game `kills`, `suicides`, `opponent_suicides`
-    and `bombs` (per learner agent).
+    and `bombs` (laid per learner agent, as the engine counts them), from the final infos.
 
     An agent that died in an earlier chunk is absent from the later ones, so all are searched."""
     returns: dict = {}
-    bombs: dict = {}
     modules: dict = {}
     for chunk in chunks:
         for agent in chunk.agent_episodes.values():
             modules[agent.agent_id] = agent.module_id
             if agent.module_id == LEARNER:
                 returns[agent.agent_id] = returns.get(agent.agent_id, 0.0) + agent.get_return()
-                bombs[agent.agent_id] = bombs.get(agent.agent_id, 0) + sum(
-                    move_of(a) == Action.BOMB for a in agent.get_actions())
     finals = [e.get_infos(-1) for e in chunks[-1].agent_episodes.values()]
     final = next((info for info in finals if "winners" in info), None)
     if not returns or final is None:
         return None
     seat, winners = next(iter(returns)), final["winners"]
-    outcome = {
+    died, killers = final["died"], final["killers"]
+    return {
         "result": "tie" if not winners else "win" if seat in winners else "loss",
         "return": sum(returns.values()) / len(returns),
         "opponent": next(module for agent, module in modules.items() if agent % 2 != seat % 2),
-        "bombs": sum(bombs.values()) / len(bombs),
+        "bombs": sum(final["laid"][agent] for agent in returns) / len(returns),
+        "kills": kills_of_team(seat, died, killers),
+        "suicides": deaths_by_cause((seat % 2, seat % 2 + 2), died, killers)["self"],
+        "opponent_suicides": deaths_by_cause((1 - seat % 2, 3 - seat % 2), died,
+                                             killers)["self"],
     }
-    if "killers" in final:
-        died, killers = final["died"], final["killers"]
-        outcome["kills"] = kills_of_team(seat, died, killers)
-        outcome["suicides"] = deaths_by_cause((seat % 2, seat % 2 + 2), died, killers)["self"]
-        outcome["opponent_suicides"] = deaths_by_cause(
-            (1 - seat % 2, 3 - seat % 2), died, killers)["self"]
-    return outcome
 
 
 class OutcomeMetrics(RLlibCallback):
@@ -83,11 +77,10 @@ class OutcomeMetrics(RLlibCallback):
         metrics_logger.log_value("learner_return", outcome["return"], window=100)
         metrics_logger.log_value("learner_bombs", outcome["bombs"], window=100)
         for key in ("kills", "suicides", "opponent_suicides"):
-            if key in outcome:
-                metrics_logger.log_value(f"learner_{key}", float(outcome[key]), window=100)
-                if league and key == "kills":
-                    metrics_logger.log_value(f"learner_kills_vs_{opponent}",
-                                             float(outcome[key]), window=100)
+            metrics_logger.log_value(f"learner_{key}", float(outcome[key]), window=100)
+        if league:
+            metrics_logger.log_value(f"learner_kills_vs_{opponent}", float(outcome["kills"]),
+                                     window=100)
         filters = list(episode.custom_data.get(FILTERS_KEY, {}).values())
         steps = sum(f.steps for f in filters)
         if steps:

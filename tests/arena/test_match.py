@@ -220,8 +220,8 @@ def test_records_credit_every_death_to_a_cause_and_tables_show_kills(tmp_path):
         # every death has exactly one cause: an enemy kill, a suicide or a team kill
         assert counts["kills_a"] + counts["suicides_b"] + counts["team_kills_b"] == dead_b
         assert counts["kills_b"] + counts["suicides_a"] + counts["team_kills_a"] == dead_a
-        # the reference's own-bomb deaths are suicides here
-        assert counts["suicides_a"] >= sum(r.own_bomb_deaths[s] for s in r.seats_a)
+        # own-bomb deaths are the engine's suicides
+        assert counts["suicides_a"] == sum(r.own_bomb_deaths[s] for s in r.seats_a)
     summary = summarise(records)
     assert summary["kills_a_per_game"] + summary["kills_b_per_game"] > 0
     write_records(tmp_path / "m.jsonl", records)

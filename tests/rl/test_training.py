@@ -32,7 +32,8 @@ def test_stage_boundary_and_warmup_freeze(smoke):
         played = it["result"]["curriculum"]["iteration_stage_name"]
         assert played == smoke["curriculum"].stages[it["stage"]].name
     last = iterations[-1]["result"]["env_runners"]
-    assert {"learner_win", "learner_loss", "learner_tie", "learner_return"} <= set(last)
+    assert {"learner_win", "learner_loss", "learner_tie", "learner_return", "learner_bombs",
+            "learner_kills", "learner_suicides", "learner_opponent_suicides"} <= set(last)
     for it in iterations:  # the learner's health metrics (learner.py), on every iteration
         health = it["result"]["learners"][LEARNER]
         assert health["nonfinite_updates_skipped"] == 0
