@@ -39,7 +39,6 @@ from ..game.constants import (
     BOMB_LIFE_AT_LAYING,
     NUM_ACTIONS,
     NUM_AGENTS,
-    RADIO_NUM_WORDS,
     TEAM_PRESET,
     Action,
     GameType,
@@ -61,7 +60,7 @@ from ..game.state import (
     M_BOMBS,
     M_FLAMES,
 )
-from ..game.step import step_game
+from ..game.step import step_buffers, step_game
 from .belief import (
     AGENT_BASE,
     CELLS,
@@ -365,11 +364,7 @@ def root_values(board, agents, bombs, flames, items, meta, radio, me, game_type,
     n_cached = 0
     root_alive = agents[:, A_ALIVE] != 0
     actions = np.zeros(NUM_AGENTS, np.int64)
-    words = np.zeros((NUM_AGENTS, RADIO_NUM_WORDS), np.int64)
-    rewards = np.zeros(NUM_AGENTS, np.int64)
-    burn = np.zeros((size, size), np.uint8)
-    killers = np.zeros(NUM_AGENTS, np.uint8)
-    laid = np.zeros(NUM_AGENTS, np.int64)
+    words, rewards, burn, killers, laid = step_buffers(size)
     value = np.full(NUM_ACTIONS, -np.inf)
     chosen = np.full(levels, -1, np.int64)
     level = 0

@@ -16,9 +16,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..game.constants import NUM_AGENTS, RADIO_NUM_WORDS, Action, Item
+from ..game.constants import NUM_AGENTS, Action, Item
 from ..game.state import A_ALIVE, A_COL, A_ROW
-from ..game.step import step_game
+from ..game.step import step_buffers, step_game
 
 PASSAGE, RIGID, WOOD, BOMB, FLAMES, AGENT0 = (
     int(i) for i in (Item.PASSAGE, Item.RIGID, Item.WOOD, Item.BOMB, Item.FLAMES, Item.AGENT0))
@@ -79,11 +79,7 @@ def play_scenario(board, agents, bombs, flames, items, meta, radio, me, bombers,
         if s_board[r, c] == AGENT0 + me:
             s_board[r, c] = PASSAGE  # a bomb under it is drawn again by the step
     actions = np.zeros(NUM_AGENTS, np.int64)
-    words = np.zeros((NUM_AGENTS, RADIO_NUM_WORDS), np.int64)
-    rewards = np.zeros(NUM_AGENTS, np.int64)
-    burn = np.zeros((size, size), np.uint8)
-    killers = np.zeros(NUM_AGENTS, np.uint8)
-    laid = np.zeros(NUM_AGENTS, np.int64)
+    words, rewards, burn, killers, laid = step_buffers(size)
     for t in range(fire.shape[0]):
         for a in range(NUM_AGENTS):
             actions[a] = BOMB_ACTION if t == 0 and bombers[a] else STOP

@@ -19,6 +19,7 @@ from .constants import (
     FLAME_LIFE_AT_CREATION,
     MAX_AMMO,
     NUM_AGENTS,
+    RADIO_NUM_WORDS,
     Action,
     Item,
     Result,
@@ -498,6 +499,15 @@ def _score(agents, meta, game_type, max_steps, rewards):
         if rewards[a] == 1:
             return RESULT_WIN
     return RESULT_TIE
+
+
+@njit(cache=True)
+def step_buffers(size):
+    """Zeroed `words`, `rewards`, `burn`, `killers` and `laid` for `step_game` on a board of
+    `size`, for a planner that steps copies of one game in silence and reads none of them."""
+    return (np.zeros((NUM_AGENTS, RADIO_NUM_WORDS), np.int64), np.zeros(NUM_AGENTS, np.int64),
+            np.zeros((size, size), np.uint8), np.zeros(NUM_AGENTS, np.uint8),
+            np.zeros(NUM_AGENTS, np.int64))
 
 
 @njit(cache=True)
