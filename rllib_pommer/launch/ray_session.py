@@ -8,7 +8,9 @@ kill. `record` writes the session folder and the driver's pid and start time to
 that session once its driver is gone. A process belongs to the session if it holds a file open
 in the session folder (every Ray process keeps its logs there), so other Ray instances on the
 machine (another run, a long campaign) are never touched. A driver that is still alive means the
-run is still going: a second start in its folder is refused.
+run is still going: a second start in its folder is refused, and `train --stop` finds the driver
+to ask (launch/packing.py). A run on a cluster notes its driver alone: the cluster's processes
+are not the run's to end.
 """
 
 from __future__ import annotations
@@ -36,11 +38,14 @@ def _start_time(pid: int) -> str | None:
     return None if fields[0] == "Z" else fields[19]  # fields 3 (state) and 22
 
 
-def record(run_dir: Path) -> None:
-    """Note the local Ray instance this process started in `run_dir` (made if missing)."""
-    import ray
+def record(run_dir: Path, cluster: bool = False) -> None:
+    """Note this process, the run's driver, in `run_dir` (made if missing), with the local Ray
+    instance it started, or none where it joined a `cluster`."""
+    session_dir = None
+    if not cluster:
+        import ray
 
-    session_dir = ray._private.worker._global_node.get_session_dir_path()  # not in the public API
+        session_dir = ray._private.worker._global_node.get_session_dir_path()  # not public API
     run_dir = Path(run_dir)
     run_dir.mkdir(parents=True, exist_ok=True)
     note = {"session_dir": session_dir, "driver_pid": os.getpid(),
@@ -95,19 +100,20 @@ def _alive(note: dict) -> bool:
 
 
 def reap(run_dir: Path) -> list[int]:
-    """End the Ray processes left by the run last started in `run_dir` if its driver is gone;
-    returns their pids. ValueError if that driver is still running."""
+    """End the Ray processes left by the run last started in `run_dir` if its driver is gone,
+    and drop its note; returns their pids. ValueError if that driver is still running."""
     path = Path(run_dir) / SESSION_FILE
     note = _note(run_dir)
     if note is None:
         return []
     session_dir, pid = note["session_dir"], note["driver_pid"]
-    if not (isinstance(session_dir, str) and os.path.isabs(session_dir)
-            and Path(session_dir).name.startswith("session_")):
-        return []  # not a Ray session folder: nothing here is safe to end
     if _alive(note):
         raise ValueError(f"{Path(run_dir).resolve()}: a run (pid {pid}) is still training in "
                          f"this folder; stop it first")
+    if not (isinstance(session_dir, str) and os.path.isabs(session_dir)
+            and Path(session_dir).name.startswith("session_")):
+        path.unlink(missing_ok=True)  # a run on a cluster, or no Ray session folder:
+        return []  # nothing here is safe to end
     orphans = session_processes(session_dir)
     for orphan in orphans:
         with contextlib.suppress(ProcessLookupError, PermissionError):  # gone, or not ours

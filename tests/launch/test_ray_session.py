@@ -69,7 +69,22 @@ def test_a_run_still_going_in_the_folder_is_not_touched(tmp_path):
         process.wait()
 
 
-@pytest.mark.parametrize("session_dir", ["", "/", "relative/session_x", "/tmp/not_a_session"])
+@pytest.mark.parametrize("session_dir",
+                         [None, "", "/", "relative/session_x", "/tmp/not_a_session"])
 def test_a_note_that_names_no_session_folder_ends_nothing(tmp_path, session_dir):
     _note(tmp_path / "run", session_dir, 2**22 + 1, "1")
     assert ray_session.reap(tmp_path / "run") == []
+    assert not (tmp_path / "run" / ray_session.SESSION_FILE).exists()
+
+
+def test_a_run_on_a_cluster_notes_its_driver_alone(tmp_path):
+    """A driver that joined a cluster notes itself and no session (the cluster's processes are
+    not the run's): a second start beside it is refused, and once it is gone the note goes,
+    ending nothing."""
+    ray_session.record(tmp_path / "run", cluster=True)
+    note = json.loads((tmp_path / "run" / ray_session.SESSION_FILE).read_text())
+    assert note["session_dir"] is None and note["driver_pid"] == os.getpid()
+    assert ray_session.live_driver(tmp_path / "run") == os.getpid()
+    with pytest.raises(ValueError, match=f"a run \\(pid {os.getpid()}\\) is still training"):
+        ray_session.reap(tmp_path / "run")
+    assert (tmp_path / "run" / ray_session.SESSION_FILE).exists()
