@@ -142,6 +142,8 @@ def start_run(settings: RunSettings, say=print) -> tuple[Curriculum, Path, Path 
         except ValueError:
             ray.shutdown()  # leave the cluster before the error ends the command
             raise
+    if settings.address is not None:  # a cluster: note the driver alone, for `train --stop`
+        ray_session.record(out, cluster=True)
     record_run_curriculum(out, curriculum)
     say(f"TensorBoard: tensorboard --logdir {out} (Tune's own hint below names a folder of the "
         f"Ray session under /tmp/ray, not the run's)")
