@@ -2,6 +2,7 @@
 
     python -m rllib_pommer.train [--curriculum NAME|FILE] [--out RUN_DIR] [--resume]
                                  [--address RAY_ADDRESS] [--pi-weights FILE]
+                                 [--num-learners N] [--num-gpus-per-learner G]
     python -m rllib_pommer.train --out RUN_DIR [--stop] [--pack]
     python -m rllib_pommer.train --out RUN_DIR --export policies/NAME
 
@@ -46,7 +47,14 @@ HELP = {
                        "--torch-threads 2 when the run has a 2-core machine to itself)",
     "seed": "default %(default)s",
     "num_cpus": "CPUs of the Ray instance started here (default %(default)s)",
-    "torch_threads": "torch threads of the learner (default %(default)s)",
+    "torch_threads": "torch threads of the learner in the algorithm's process (a learner actor "
+                     "uses the CPUs it holds) (default %(default)s)",
+    "num_learners": "learner actors that split each update, data-parallel (default %(default)s: "
+                    "the learner in the algorithm's process)",
+    "num_gpus_per_learner": "GPUs of each learner (with 0 learners, of the algorithm's process); "
+                            "env runners stay on CPUs (default %(default)s)",
+    "num_cpus_per_learner": "Ray CPUs of each learner (with 0 learners, of the algorithm's "
+                            "process, at least 1) (default %(default)s)",
 }
 
 

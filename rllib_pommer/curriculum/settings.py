@@ -118,19 +118,84 @@ class RunSettings:
     seed: int = 0
     num_cpus: int = 2  # of our own Ray instance
     torch_threads: int = 1  # the learner's (and the driver's): 2 with 2 env runners on 2 cores
+    # Learner actors updating data-parallel (rl/learner.py); 0: one learner in the algorithm's
+    # process. Each holds these GPUs and CPUs (RLlib: 0 learners put them on that process).
+    num_learners: int = 0
+    num_gpus_per_learner: float = 0.0
+    num_cpus_per_learner: float = 1.0
+
+    @property
+    def main_process_cpus(self) -> float:
+        """Ray CPUs of the algorithm's process: one, or the learner's own where it holds the
+        learner and asks for more (RLlib's bundle takes the larger)."""
+        return 1.0 if self.num_learners else max(1.0, self.num_cpus_per_learner)
+
+    @property
+    def learner_cpus(self) -> float:
+        """Ray CPUs of the learner actors together."""
+        return self.num_learners * self.num_cpus_per_learner
+
+    @property
+    def gpus(self) -> float:
+        """GPUs the run asks for: each learner's, or the one learner's in the algorithm's
+        process."""
+        return max(self.num_learners, 1) * self.num_gpus_per_learner
 
     def __post_init__(self):
         for name, low in (("num_env_runners", 0), ("num_cpus", 1), ("torch_threads", 1),
-                          ("seed", 0)):
+                          ("seed", 0), ("num_learners", 0)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < low:
                 raise ValueError(f"--{name.replace('_', '-')} must be {low} or more, "
                                  f"got {value!r}")
+        for name, low in (("num_gpus_per_learner", 0.0), ("num_cpus_per_learner", 0.0)):
+            _check_quantity(name, getattr(self, name), low)
+        if self.num_learners and not (self.num_cpus_per_learner or self.num_gpus_per_learner):
+            raise ValueError(f"--num-learners {self.num_learners} with --num-cpus-per-learner 0 "
+                             f"and --num-gpus-per-learner 0: a learner needs a CPU or a GPU")
+        if self.address is None:
+            self._check_own_cpus()
         if self.address is None and self.torch_threads > self.num_cpus:
             raise ValueError(f"--torch-threads {self.torch_threads} exceeds --num-cpus "
                              f"{self.num_cpus}: threads beyond the CPUs only wait on each other")
-        if self.address is None and self.num_env_runners and self.num_cpus < 2:
-            raise ValueError(f"--num-env-runners {self.num_env_runners} needs --num-cpus 2 or "
-                             f"more: the learner's process takes one Ray CPU and each runner "
-                             f"needs a share of another (with {self.num_cpus}, Tune would wait "
-                             f"for CPUs forever)")
+
+    def _check_own_cpus(self) -> None:
+        """Refuse a layout our own Ray instance (`--num-cpus`) cannot place: Tune would wait
+        for the CPUs for ever. The algorithm's process and the learners take theirs first;
+        remote env runners share what is left (launch/training.cpus_per_env_runner)."""
+        if not self.num_learners and self.main_process_cpus == 1:
+            if self.num_env_runners and self.num_cpus < 2:
+                raise ValueError(f"--num-env-runners {self.num_env_runners} needs --num-cpus 2 "
+                                 f"or more: the learner's process takes one Ray CPU and each "
+                                 f"runner needs a share of another (with {self.num_cpus}, Tune "
+                                 f"would wait for CPUs forever)")
+            return
+        fixed = self.main_process_cpus + self.learner_cpus
+        asks = (f"1 for the algorithm's process and {self.learner_cpus:g} for --num-learners "
+                f"{self.num_learners} x --num-cpus-per-learner {self.num_cpus_per_learner:g}"
+                if self.num_learners else
+                f"{fixed:g} for the learner's process (--num-cpus-per-learner "
+                f"{self.num_cpus_per_learner:g})")
+        if fixed > self.num_cpus + 1e-9:
+            raise ValueError(f"the run asks for {fixed:g} Ray CPUs ({asks}) but --num-cpus is "
+                             f"{self.num_cpus} (Tune would wait for CPUs forever): pass "
+                             f"--num-cpus {math.ceil(fixed - 1e-9)} or more, or ask for fewer "
+                             f"learner CPUs")
+        if self.num_env_runners and fixed > self.num_cpus - 1e-9:
+            raise ValueError(f"--num-env-runners {self.num_env_runners} needs a share of a CPU "
+                             f"beside the {fixed:g} the run's learners take ({asks}), and "
+                             f"--num-cpus {self.num_cpus} leaves none (Tune would wait for "
+                             f"CPUs forever): pass --num-cpus {math.floor(fixed + 1e-9) + 1} or "
+                             f"more, or --num-env-runners 0")
+
+
+def _check_quantity(name: str, value, low: float) -> None:
+    """A Ray resource quantity: a number of at least `low`, below 1 or whole (Ray refuses
+    1.5 GPUs)."""
+    option = f"--{name.replace('_', '-')}"
+    if isinstance(value, bool) or not isinstance(value, int | float) or not value >= low \
+            or math.isinf(value):
+        raise ValueError(f"{option} must be a number of {low:g} or more, got {value!r}")
+    if value > 1 and value != int(value):
+        raise ValueError(f"{option} must be below 1 or a whole number (Ray's rule for "
+                         f"resources), got {value!r}")

@@ -136,12 +136,13 @@ def start_run(settings: RunSettings, say=print) -> tuple[Curriculum, Path, Path 
     init_ray(settings.address, num_cpus=settings.num_cpus, torch_threads=settings.torch_threads)
     if settings.address is None:  # our own Ray: note it, for the next start to clean up after
         ray_session.record(out)
-    else:
-        try:
+    try:
+        if settings.address is not None:
             check_cluster_fits(settings)
-        except ValueError:
-            ray.shutdown()  # leave the cluster before the error ends the command
-            raise
+        check_gpus(settings)
+    except ValueError:
+        ray.shutdown()  # leave the cluster (or end our own Ray) before the error ends the command
+        raise
     if settings.address is not None:  # a cluster: note the driver alone, for `train --stop`
         ray_session.record(out, cluster=True)
     record_run_curriculum(out, curriculum)
@@ -152,29 +153,54 @@ def start_run(settings: RunSettings, say=print) -> tuple[Curriculum, Path, Path 
 
 def check_cluster_fits(settings: RunSettings) -> None:
     """Refuse a run the cluster's free CPUs cannot hold: Tune would wait for them for ever,
-    printing "insufficient resources" every minute. The run asks for one CPU for the
-    algorithm's process (its learner) and `cpus_per_env_runner` for each remote runner."""
+    printing "insufficient resources" every minute. The run asks for the algorithm's process
+    (one CPU, or its learner's `--num-cpus-per-learner` where it holds the learner), each
+    learner actor's `--num-cpus-per-learner`, and `cpus_per_env_runner` for each remote
+    runner."""
     free = ray.available_resources().get("CPU", 0.0)
     runners = settings.num_env_runners * cpus_per_env_runner(settings)
-    if 1 + runners > free + 1e-9:
-        fits = max(int(free - 1 + 1e-9), 0)
+    fixed = settings.main_process_cpus + settings.learner_cpus
+    if fixed + runners > free + 1e-9:
+        fits = max(int(free - fixed + 1e-9), 0)
+        learners = (f"{settings.main_process_cpus:g} for the learner's process"
+                    if not settings.num_learners else
+                    f"1 for the algorithm's process, {settings.learner_cpus:g} for "
+                    f"--num-learners {settings.num_learners}")
         raise ValueError(
             f"the Ray cluster at {settings.address!r} has {free:g} free CPUs; the run asks for "
-            f"{1 + runners:g} (1 for the learner's process, {runners:g} for "
+            f"{fixed + runners:g} ({learners}, {runners:g} for "
             f"--num-env-runners {settings.num_env_runners}): "
-            + (f"pass --num-env-runners {fits} or fewer, or " if free >= 1 else "")
+            + (f"pass --num-env-runners {fits} or fewer, or " if free >= fixed else "")
             + "free or add CPUs")
+
+
+def check_gpus(settings: RunSettings) -> None:
+    """Refuse a run asking for more GPUs than Ray has free (on our own instance, the GPUs Ray
+    found on this machine): Tune would wait for them for ever."""
+    if not settings.gpus:
+        return
+    free = ray.available_resources().get("GPU", 0.0)
+    if settings.gpus > free + 1e-9:
+        where = (f"the Ray cluster at {settings.address!r}" if settings.address else
+                 "this machine's Ray (it counts the GPUs CUDA_VISIBLE_DEVICES shows)")
+        who = (f"--num-learners {settings.num_learners} x " if settings.num_learners
+               else "the learner in the algorithm's process: ")
+        raise ValueError(f"the run asks for {settings.gpus:g} GPUs ({who}--num-gpus-per-learner "
+                         f"{settings.num_gpus_per_learner:g}) and {where} has {free:g} free: "
+                         f"pass --num-gpus-per-learner 0 to learn on CPUs, or add GPUs")
 
 
 def cpus_per_env_runner(settings: RunSettings) -> float:
     """Ray CPUs each remote env runner asks for. On a Ray instance of our own, the algorithm's
-    process takes one and the runners share the rest: PPO is synchronous, so the runners sample
-    while the learner waits and the learner trains, on `--torch-threads` threads, while they
-    wait; `--num-env-runners 2 --torch-threads 2` keeps both cores of a 2-core machine busy in
-    both phases. (Ray refuses a runner of 0 CPUs.) On a cluster, one each."""
+    process and the learner actors take theirs and the runners share the rest: PPO is
+    synchronous, so the runners sample while the learner waits and the learner trains, on
+    `--torch-threads` threads, while they wait; `--num-env-runners 2 --torch-threads 2` keeps
+    both cores of a 2-core machine busy in both phases. (Ray refuses a runner of 0 CPUs;
+    RunSettings refuses a layout that leaves none.) On a cluster, one each."""
     if settings.address is not None or settings.num_env_runners == 0:
         return 1.0
-    return min(1.0, (settings.num_cpus - 1) / settings.num_env_runners)  # num_cpus >= 2 here
+    left = settings.num_cpus - settings.main_process_cpus - settings.learner_cpus
+    return min(1.0, left / settings.num_env_runners)  # > 0: RunSettings checks it
 
 
 def train(curriculum: Curriculum, out: Path, settings: RunSettings,
@@ -186,7 +212,9 @@ def train(curriculum: Curriculum, out: Path, settings: RunSettings,
     config = build_config(curriculum, pi_weights=settings.pi_weights,
                           num_env_runners=settings.num_env_runners,
                           cpus_per_env_runner=cpus_per_env_runner(settings), seed=settings.seed,
-                          restore_from=start)
+                          restore_from=start, num_learners=settings.num_learners,
+                          num_gpus_per_learner=settings.num_gpus_per_learner,
+                          num_cpus_per_learner=settings.num_cpus_per_learner)
     tuner = tune.Tuner(
         config.algo_class,
         param_space=config,

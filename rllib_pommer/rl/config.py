@@ -24,6 +24,14 @@ faster with 2 remote env runners and 2 learner threads (`bench layout` compares 
 resumed run is built afresh from its data (launch/training.py), so it takes the layout its
 command asks for.
 
+Learners (`train --num-learners N`, `--num-gpus-per-learner`, `--num-cpus-per-learner`): 0 keeps
+the one learner in the algorithm's process; N learner actors share each update data-parallel
+(rl/learner.py averages their gradients). They split the curriculum's PPO batch rather than
+multiply it: each learner takes 1/N of the iteration's env steps and 1/N of each minibatch's
+rows (rounded up), so an iteration samples as many games and takes as many optimizer steps of
+as many rows as with one learner, and the paper's minibatch of 128 stays 128 rows a step
+(RLlib's `train_batch_size_per_learner` and `minibatch_size` are per learner).
+
 Speed settings, none of which changes what PPO computes:
 
 - the module (rl_module.py) runs pi and vf channels-last and vf under bfloat16 autocast, and the
@@ -40,6 +48,7 @@ What each choice was measured to gain: docs/measurements.md.
 
 from __future__ import annotations
 
+import math
 from functools import partial
 from pathlib import Path
 
@@ -84,12 +93,17 @@ def check_weights(path: Path, part: str = "pi", radio: bool = False) -> Path:
 def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None,
                  num_env_runners: int = 0, cpus_per_env_runner: float = 1.0,
                  seed: int = 0, env: str = ENV_NAME,
-                 restore_from: Path | None = None) -> PPOConfig:
+                 restore_from: Path | None = None, num_learners: int = 0,
+                 num_gpus_per_learner: float = 0.0,
+                 num_cpus_per_learner: float = 1.0) -> PPOConfig:
     """PPO for `curriculum`; `pi_weights` overrides the file's; `env` may name another env with
     the same spaces (the bench's zero-cost twin). `restore_from`: a checkpoint the algorithm
     loads when it is built (rl/stages.py), which holds pi, so the imitation weights may be
     absent (rl_module.py). `num_env_runners` remote runners of `cpus_per_env_runner` Ray CPUs
-    each sample while the learner waits (its torch threads: names.LEARNER_THREADS_ENV). Every
+    each sample while the learner waits (its torch threads: names.LEARNER_THREADS_ENV);
+    `num_learners` learner actors of `num_gpus_per_learner` GPUs and `num_cpus_per_learner`
+    CPUs each split every update (module docstring), 0 keeps the learner in the algorithm's
+    process (on a GPU too where `num_gpus_per_learner` asks for one). Every
     object of ours the config holds is built from plain data by a class on the map's list of
     stable import paths (docs/architecture.md), which is all a run's saved config names."""
     restoring = restore_from is not None
@@ -115,6 +129,7 @@ def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None
     modules |= {name: fixed_module_spec(name) for name in curriculum.policies()}
     if curriculum.league:  # built empty; the callback's gate fills them (league.py)
         modules |= snapshot_specs(curriculum.league, curriculum.league_members())
+    shards = max(num_learners, 1)  # the learners split the batch (module docstring)
     return (
         PPOConfig()
         .environment(env, env_config=env_config)
@@ -132,12 +147,15 @@ def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None
         .rl_module(rl_module_spec=MultiRLModuleSpec(rl_module_specs=modules))
         .training(
             entropy_coeff=ppo.entropy_coeff, clip_param=ppo.clip_param,
-            minibatch_size=ppo.minibatch_size, lr=ppo.lr, gamma=ppo.gamma, lambda_=ppo.lambda_,
-            num_epochs=ppo.num_epochs, train_batch_size_per_learner=ppo.train_batch_size,
+            minibatch_size=math.ceil(ppo.minibatch_size / shards), lr=ppo.lr, gamma=ppo.gamma,
+            lambda_=ppo.lambda_, num_epochs=ppo.num_epochs,
+            train_batch_size_per_learner=math.ceil(ppo.train_batch_size / shards),
             vf_loss_coeff=ppo.vf_loss_coeff, use_kl_loss=ppo.use_kl_loss,
             grad_clip=ppo.grad_clip,
             learner_config_dict={DUAL_CLIP_KEY: ppo.dual_clip})  # inf: PPO's own loss
-        .learners(learner_class=PommerPPOLearner)
+        .learners(learner_class=PommerPPOLearner, num_learners=num_learners,
+                  num_gpus_per_learner=num_gpus_per_learner,
+                  num_cpus_per_learner=num_cpus_per_learner)
         .callbacks([partial(LeagueCallback, curriculum_ref(curriculum)),  # the gate first
                     partial(StageCallback, curriculum_ref(curriculum),
                             str(restore_from) if restoring else None),

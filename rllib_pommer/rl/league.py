@@ -40,6 +40,15 @@ league's weights follow from it (curriculum/matchmaking.py) and reach every env 
 place. The result's `league` entry says how many snapshots play and where the gate's block stands
 (with an `exploiter` entry: its block and the slot it filled), and its `matchmaking` entry gives
 each member's share of the coming games, estimated win rate and decayed games.
+
+With learner actors (`train --num-learners N`) every learner holds the whole league: its modules
+are the learner's own, and the learners keep identical weights (rl/learner.py). So each step of
+the book (the gate's count, a slot filled from pi, the exploiter's block and restart, the
+matchmaking records) runs on every learner alike, through RLlib's `foreach_learner`, and every
+learner must come to the same answer (`on_every_learner` refuses learners that disagree); a
+filled slot and a restarted exploiter are then copied from the first learner to the others with
+`LearnerGroup.get_state`/`set_state`, so that they hold the very same weights whatever the
+learners' arithmetic did. Reads go to the first learner, as RLlib's checkpoints do.
 """
 
 from __future__ import annotations
@@ -49,6 +58,7 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 from ray.rllib.callbacks.callbacks import RLlibCallback
+from ray.rllib.core import COMPONENT_LEARNER, COMPONENT_RL_MODULE
 from ray.rllib.core.columns import Columns
 from ray.rllib.core.rl_module.rl_module import RLModule, RLModuleSpec
 from ray.rllib.core.rl_module.torch import TorchRLModule
@@ -94,7 +104,7 @@ class SnapshotModule(TorchRLModule):
         return Slot(module_id, int(self.born), int(self.tally[0]), int(self.tally[1]))
 
     def count(self, wins: int, games: int) -> None:
-        self.tally += torch.tensor([wins, games], dtype=torch.int64)
+        self.tally += torch.tensor([wins, games], dtype=torch.int64, device=self.tally.device)
 
     def fill(self, pi: torch.nn.Module, episodes: int) -> None:
         """Copy `pi`'s weights in and open the slot at `episodes`; its block starts again."""
@@ -150,9 +160,15 @@ def snapshot_specs(settings: LeagueSettings, members: list[str]) -> dict[str, RL
     return specs
 
 
+def module_of(learner, module_id: str):
+    """The learner's module `module_id` itself, never a wrapper around it (RLlib wraps modules
+    in DDP with several learners; rl/learner.py does not, this holds either way)."""
+    return learner.module[module_id].unwrapped()
+
+
 def read_book(learner, settings: LeagueSettings) -> list[Slot]:
     """The slots as the learner's modules hold them (run on a learner)."""
-    return [learner.module[slot].slot(slot) for slot in settings.slot_ids()]
+    return [module_of(learner, slot).slot(slot) for slot in settings.slot_ids()]
 
 
 def next_slot(book: list[Slot]) -> Slot:
@@ -174,13 +190,13 @@ def gate_step(learner, settings: LeagueSettings, wins: int, games: int,
     if games <= 0:
         return None
     slot = next_slot(read_book(learner, settings))
-    module = learner.module[slot.module_id]
+    module = module_of(learner, slot.module_id)
     module.count(wins, games)
     slot = module.slot(slot.module_id)
     if slot.games < settings.gate_games:
         return None
     if slot.wins / slot.games >= settings.gate_win:
-        module.fill(learner.module[LEARNER].pi, episodes)
+        module.fill(module_of(learner, LEARNER).pi, episodes)
         return slot.module_id
     module.tally.zero_()
     return None
@@ -192,7 +208,7 @@ def exploiter_step(learner, settings: LeagueSettings, wins: int, games: int,
     learner); when the block is complete and won at `exploiter_gate_win` or more, copy the
     exploiter's pi into the next snapshot slot and start the exploiter again from the learner
     (module docstring). Returns the filled slot's id, or None."""
-    book = learner.module[MATCHMAKING_MODULE]
+    book = module_of(learner, MATCHMAKING_MODULE)
     book.exploiter += np.array([wins, games], np.int64)
     won, played = (int(n) for n in book.exploiter)
     if played < settings.exploiter_gate_games:
@@ -201,8 +217,8 @@ def exploiter_step(learner, settings: LeagueSettings, wins: int, games: int,
     if won / played < settings.exploiter_gate_win:
         return None
     slot = next_slot(read_book(learner, settings)).module_id
-    exploiter, main = learner.module[EXPLOITER], learner.module[LEARNER]
-    learner.module[slot].fill(exploiter.pi, episodes)
+    exploiter, main = module_of(learner, EXPLOITER), module_of(learner, LEARNER)
+    module_of(learner, slot).fill(exploiter.pi, episodes)
     exploiter.pi.load_state_dict(main.pi.state_dict())
     exploiter.vf.load_state_dict(main.vf.state_dict())
     learner.get_optimizer(EXPLOITER).state.clear()  # Adam's moments belong to the old weights
@@ -225,9 +241,39 @@ def count(runners: dict, key: str) -> int:
 
 
 def on_learner(algorithm, func):
-    """`func(learner)`'s value on the (first) learner, which holds the module states that
-    checkpoints save."""
+    """`func(learner)`'s value on the first learner, which holds the module states that
+    checkpoints save; `func` reads only."""
     return next(iter(algorithm.learner_group.foreach_learner(func))).get()
+
+
+def on_every_learner(algorithm, func):
+    """`func(learner)` run on every learner, a step of the league's book; its value, which
+    must be the same on all (module docstring)."""
+    values = [result.get() for result in algorithm.learner_group.foreach_learner(func)]
+    if any(value != values[0] for value in values[1:]):
+        raise RuntimeError(f"the learners' league books disagree: {values}; they must hold "
+                           f"the same weights and counts (rl/learner.py)")
+    return values[0]
+
+
+def module_states(algorithm, module_ids) -> dict:
+    """The first learner's states of modules `module_ids`, through RLlib's
+    `LearnerGroup.get_state`."""
+    components = [f"{COMPONENT_LEARNER}/{COMPONENT_RL_MODULE}/{mid}" for mid in module_ids]
+    state = algorithm.learner_group.get_state(components=components)
+    return state[COMPONENT_LEARNER][COMPONENT_RL_MODULE]
+
+
+def share_modules(algorithm, module_ids) -> None:
+    """Modules `module_ids` of the first learner copied onto every other learner (module
+    docstring), through RLlib's `LearnerGroup.set_state`; nothing to do with one learner. The
+    state carries no weights sequence number, which would make a learner at the same number
+    skip it."""
+    group = algorithm.learner_group
+    if group.is_local or len(group) < 2 or not module_ids:
+        return
+    group.set_state({COMPONENT_LEARNER: {
+        COMPONENT_RL_MODULE: module_states(algorithm, module_ids)}})
 
 
 def push_modules(algorithm, slots) -> None:
@@ -235,10 +281,12 @@ def push_modules(algorithm, slots) -> None:
     runner. Not RLlib's weight sync, which an env runner skips when the learner's weights
     sequence number has not moved since the last sync (a slot filled after an update has the
     same number), and which ran before the callback changed them."""
+    if not slots:
+        return
+    states = module_states(algorithm, slots)
     for slot in slots:
-        state = on_learner(algorithm, lambda learner, slot=slot: learner.module[slot].get_state())
         algorithm.env_runner_group.foreach_env_runner(
-            lambda runner, slot=slot, state=state: runner.module[slot].set_state(state),
+            lambda runner, slot=slot, state=states[slot]: runner.module[slot].set_state(state),
             local_env_runner=True)
 
 
@@ -248,7 +296,7 @@ def _book(algorithm, league: LeagueSettings) -> list[Slot]:
 
 def _records(algorithm) -> dict[str, Record]:
     """The matchmaking book: member -> Record."""
-    return on_learner(algorithm, lambda learner: learner.module[MATCHMAKING_MODULE].records())
+    return on_learner(algorithm, lambda learner: module_of(learner, MATCHMAKING_MODULE).records())
 
 
 def filled_slots(algorithm, curriculum) -> tuple[str, ...]:
@@ -311,8 +359,8 @@ class LeagueCallback(RLlibCallback):
                                 for key in ("wins", "losses"))
                 results[name] = (wins, losses, games - wins - losses)
         halflife = self.curriculum.league.priority_halflife
-        algorithm.learner_group.foreach_learner(
-            lambda learner: learner.module[MATCHMAKING_MODULE].add(results, halflife))
+        on_every_learner(algorithm, lambda learner: module_of(
+            learner, MATCHMAKING_MODULE).add(results, halflife))
 
     def _matchmaking(self, algorithm, opponent: tuple[str, ...]) -> dict:
         """Each member's share of the coming games, win-rate estimate and decayed games."""
@@ -328,20 +376,22 @@ class LeagueCallback(RLlibCallback):
         matchmaking, starts a new record), and so does a restarted exploiter."""
         league = self.curriculum.league
         wins, games = count(runners, "league_wins"), count(runners, "league_games")
-        filled = on_learner(
+        filled = on_every_learner(
             algorithm, lambda learner: gate_step(learner, league, wins, games, episodes))
         self._new_member(algorithm, filled)
         entry = {}
         if league.exploiter:  # its wins are the learner's losses against it
             wins, games = (count(runners, f"league_{key}_vs_{EXPLOITER}")
                            for key in ("losses", "games"))
-            joined = on_learner(algorithm, lambda learner: exploiter_step(
+            joined = on_every_learner(algorithm, lambda learner: exploiter_step(
                 learner, league, wins, games, episodes))
             self._new_member(algorithm, joined)
-            if joined:
-                push_modules(algorithm, [EXPLOITER])  # restarted from the learner
+            if joined:  # restarted from the learner
+                share_modules(algorithm, [EXPLOITER])
+                push_modules(algorithm, [EXPLOITER])
             block_wins, block_games = on_learner(
-                algorithm, lambda learner: learner.module[MATCHMAKING_MODULE].exploiter.tolist())
+                algorithm, lambda learner: module_of(
+                    learner, MATCHMAKING_MODULE).exploiter.tolist())
             entry["exploiter"] = {"filled": joined, "gate_wins": block_wins,
                                   "gate_games": block_games}
         book = _book(algorithm, league)
@@ -356,8 +406,9 @@ class LeagueCallback(RLlibCallback):
         if slot is None:
             return
         if self.curriculum.league.prioritized:
-            algorithm.learner_group.foreach_learner(
-                lambda learner: learner.module[MATCHMAKING_MODULE].forget(slot))
+            on_every_learner(algorithm,
+                             lambda learner: module_of(learner, MATCHMAKING_MODULE).forget(slot))
+        share_modules(algorithm, [slot])
         push_modules(algorithm, [slot])
 
     def on_train_result(self, *, algorithm, result, **kwargs) -> None:

@@ -34,6 +34,35 @@ with 5e8 times its share. The dual-clip loss max(min(rA, clip(r)A), cA) caps tha
 constant: its gradient is zero. The learner gets the same gradient from RLlib's loss by zeroing
 such rows' advantages (`dual_clipped`; the loss value differs by a constant). `dual_clip` in a
 curriculum's [ppo] table sets c; the default, inf, is PPO as the paper ran it.
+
+Learners beyond one process (`train --num-learners N`, rl/config.py): RLlib's torch learner
+wraps every torch module in torch's DistributedDataParallel when N > 1, which does not fit ours:
+DDP refuses a module without trainable parameters (the snapshot slots, the frozen nets), expects
+the same parameters to receive gradients on every learner in every minibatch (pi frozen after
+the wrap, for the value warm-up, never does; an exploiter's rows may reach one learner's shard
+and not the other's, and DDP then waits for ever), and hides the module's own attributes behind
+the wrapper. So no module is wrapped: the learners start from learner 0's weights (broadcast
+when they are built), and after each backward pass `_average_gradients` all-reduces the
+gradients of the trained modules' trainable parameters in one flat tensor, each module's
+averaged over the learners whose minibatch held its rows (a module no learner saw keeps no
+gradient, as on one learner). Every learner then holds the same gradients, so the gradient clip,
+the skip of non-finite updates (an inf on one learner is an inf on all) and Adam's step keep
+their weights identical, and the league (rl/league.py), which works on every learner alike,
+keeps one book. RLlib shards an iteration's episodes over the learners and fixes one count of
+minibatches for all from every module's steps, the fixed seats' included; each learner here
+counts instead, over all learners, the rows of the modules it trains, so an iteration takes as
+many optimizer steps as one learner takes on the whole batch (rl/config.py splits the batch and
+the minibatch); a learner whose shard holds none of those rows steps through as many empty
+minibatches, taking the others' gradients (RLlib's own loop would fail on it, and the others
+would wait in the all-reduce for ever). A learner actor runs on the CPUs it holds
+(`--num-cpus-per-learner`, one thread at least), the learner in the algorithm's process on
+`--torch-threads`.
+
+On a GPU (`--num-gpus-per-learner`) RLlib moves every module of the learner to its device, the
+weights they started from included; env runners keep theirs on the CPU and get the learner's
+weights as numpy. cuDNN and cuBLAS may round float32 convolutions and products to TF32 (a 10-bit
+mantissa), which would move pi's log-probabilities against the env runners' float32 ones as
+bfloat16 does (rl_module.py), so the learner turns TF32 off.
 """
 
 from __future__ import annotations
@@ -42,9 +71,11 @@ import math
 import os
 
 import torch
+import torch.distributed as dist
 from ray.rllib.algorithms.ppo.torch.ppo_torch_learner import PPOTorchLearner
 from ray.rllib.core.columns import Columns
 from ray.rllib.evaluation.postprocessing import Postprocessing
+from ray.rllib.policy.sample_batch import MultiAgentBatch
 
 from ..curriculum.names import LEARNER, LEARNER_THREADS_ENV
 from ..game.constants import NUM_ACTIONS
@@ -65,12 +96,97 @@ class PommerPPOLearner(PPOTorchLearner):
     trained agents only, which refuses to train a learner module whose pi has no weights, skips
     non-finite updates and can dual-clip (module docstring)."""
     def build(self) -> None:
-        # Ray gives the algorithm's process, where this learner lives (and samples, without
-        # remote env runners), one OpenMP thread per CPU it holds (one); `train
-        # --torch-threads` says how many it may use.
-        torch.set_num_threads(int(os.environ.get(LEARNER_THREADS_ENV, "1")))
+        # Ray gives the algorithm's process, where the local learner lives (and samples,
+        # without remote env runners), one OpenMP thread per CPU it holds (one); `train
+        # --torch-threads` says how many it may use. A learner actor uses the CPUs it holds.
+        torch.set_num_threads(max(1, int(self.config.num_cpus_per_learner))
+                              if self.config.num_learners else
+                              int(os.environ.get(LEARNER_THREADS_ENV, "1")))
+        torch.set_flush_denormal(True)  # the planes are sparse (docs/measurements.md)
         super().build()
+        if self._device.type == "cuda":  # pi in float32 (module docstring)
+            torch.backends.cuda.matmul.allow_tf32 = False
+            torch.backends.cudnn.allow_tf32 = False
         self._learner_connector.prepend(TrainedAgentsOnly(self.should_module_be_updated))
+        if self.distributed:
+            self._broadcast_weights()
+
+    def _make_modules_ddp_if_necessary(self) -> None:
+        """No DDP wrapper: the learners average their gradients themselves (module
+        docstring)."""
+
+    def _trained_ids(self) -> list[str]:
+        """The modules this learner trains, in one order on every learner."""
+        return sorted(filter(self.should_module_be_updated, self.module.keys()))
+
+    def _broadcast_weights(self) -> None:
+        """Every torch module's weights and buffers as learner 0 built them, on every learner
+        (a vf drawn at random, a tensor of the league's book): DDP's start, without DDP."""
+        for module_id in sorted(self.module.keys()):
+            module = self.module[module_id]
+            if isinstance(module, torch.nn.Module):
+                for tensor in module.state_dict().values():
+                    dist.broadcast(tensor, src=0)
+
+    def _average_gradients(self) -> None:
+        """All-reduce the trained modules' gradients over the learners (module docstring): per
+        module, the mean over the learners that computed one; None where none did."""
+        groups = [[p for p in self.module[mid].parameters() if p.requires_grad]
+                  for mid in self._trained_ids()]
+        present = torch.tensor([any(p.grad is not None for p in group) for group in groups],
+                               dtype=torch.float32, device=self._device)
+        flat = torch.cat([present] + [
+            (p.grad if p.grad is not None else torch.zeros_like(p)).reshape(-1)
+            for group in groups for p in group])
+        dist.all_reduce(flat)
+        learners, offset = flat[:len(groups)], len(groups)
+        for count, group in zip(learners.tolist(), groups, strict=True):
+            for p in group:
+                size = p.numel()
+                p.grad = (flat[offset:offset + size].view_as(p) / count) if count else None
+                offset += size
+
+    def compute_gradients(self, loss_per_module, **kwargs):
+        gradients = super().compute_gradients(loss_per_module, **kwargs)
+        if not self.distributed:
+            return gradients
+        self._average_gradients()  # also where this learner had no loss: the others wait
+        return {pid: p.grad for pid, p in self._params.items()}
+
+    def _uncompiled_update(self, batch, **kwargs):
+        if not self.distributed:
+            return super()._uncompiled_update(batch, **kwargs)
+        # RLlib's update, less the DDP modules' `no_sync` it enters with N learners; an empty
+        # minibatch (`_create_iterator_if_necessary`) only takes the others' gradients
+        fwd_out, loss_per_module = {}, {}
+        if batch:
+            self._compute_off_policyness(batch)
+            fwd_out = self.module.forward_train(batch)
+            loss_per_module = self.compute_losses(fwd_out=fwd_out, batch=batch)
+        gradients = self.compute_gradients(loss_per_module)
+        self.apply_gradients(self.postprocess_gradients(gradients))
+        return fwd_out, loss_per_module, {}
+
+    def _create_iterator_if_necessary(self, *, training_data, num_total_minibatches=0,
+                                      num_epochs=1, minibatch_size=None, **kwargs):
+        batches = super()._create_iterator_if_necessary(
+            training_data=training_data, num_total_minibatches=num_total_minibatches,
+            num_epochs=num_epochs, minibatch_size=minibatch_size, **kwargs)
+        if not (self.distributed and minibatch_size):
+            return batches
+        # Every learner takes as many minibatches: one learner's count for the trained rows of
+        # all (module docstring). RLlib's iterator keeps its count in `_num_total_minibatches`.
+        local = getattr(batches, "_batch", None)  # None: no rows of a trained module here
+        rows = torch.tensor([len(local.policy_batches.get(mid, ())) if local is not None else 0
+                             for mid in self._trained_ids()], dtype=torch.int64,
+                            device=self._device)
+        dist.all_reduce(rows)
+        count = max(1, math.ceil(
+            num_epochs * int(rows.max()) / (self.config.num_learners * minibatch_size)))
+        if local is None:  # still one all-reduce per minibatch, or the others wait for ever
+            return [MultiAgentBatch({}, env_steps=0) for _ in range(count)]
+        batches._num_total_minibatches = count
+        return batches
 
     def configure_optimizers_for_module(self, module_id, config=None) -> None:
         params = self.get_parameters(self._module[module_id])
@@ -118,8 +234,9 @@ class PommerPPOLearner(PPOTorchLearner):
     def apply_gradients(self, gradients_dict) -> None:
         finite = all(grad is None or torch.isfinite(grad).all()
                      for grad in gradients_dict.values())
-        self.metrics.log_value((LEARNER, "nonfinite_updates_skipped"), int(not finite),
-                               reduce="sum")
+        if self._learner_index == 0:  # every learner skips the same updates: count them once
+            self.metrics.log_value((LEARNER, "nonfinite_updates_skipped"), int(not finite),
+                                   reduce="sum")
         if finite:  # else no step: the next minibatch's backward starts from zeroed gradients
             super().apply_gradients(gradients_dict)
 

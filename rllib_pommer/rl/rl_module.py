@@ -15,7 +15,8 @@ module that is about to be trained with neither source is wrong, and the learner
 (`require_pi`); a new run's weights file is checked before Ray starts (config.check_weights).
 
 Precision and speed: both networks keep their tensors channels-last, which oneDNN's CPU
-convolutions run faster than NCHW, and vf runs under bfloat16 autocast. pi runs in float32, on
+convolutions run faster than NCHW, and vf runs under bfloat16 autocast on the device its inputs
+are on (a learner's GPU too, where it has bfloat16: `vf_autocast`). pi runs in float32, on
 the env runners as in the learner, because PPO's ratio compares pi's log-probabilities before and
 after updates through a clip of 1 +- 0.01, and bfloat16 rounds a logit of magnitude m to a step
 of up to m/128: rounding alone moves the log-probabilities of rare actions (those a filter
@@ -52,6 +53,12 @@ from ray.rllib.core.rl_module.torch import TorchRLModule
 
 from ..imitation.learned import load_policy_net
 from ..imitation.network import build_net
+
+
+def vf_autocast(device: str) -> bool:
+    """Whether vf runs under bfloat16 autocast on `device` ("cpu", "cuda"): on the CPU, and on a
+    GPU that computes in bfloat16 (an older one runs vf in float32)."""
+    return device == "cpu" or (device == "cuda" and torch.cuda.is_bf16_supported())
 
 
 class PommerPPOModule(TorchRLModule, ValueFunctionAPI):
@@ -97,8 +104,10 @@ class PommerPPOModule(TorchRLModule, ValueFunctionAPI):
         return {Columns.ACTION_DIST_INPUTS: self.pi(*self._inputs(batch))}
 
     def compute_values(self, batch, embeddings=None) -> torch.Tensor:
-        with torch.autocast("cpu", dtype=torch.bfloat16):
-            return self.vf(*self._inputs(batch)).squeeze(-1).float()
+        inputs = self._inputs(batch)
+        device = inputs[0].device.type
+        with torch.autocast(device, dtype=torch.bfloat16, enabled=vf_autocast(device)):
+            return self.vf(*inputs).squeeze(-1).float()
 
     def set_pi_frozen(self, frozen: bool) -> None:
         for parameter in self.pi.parameters():

@@ -8,8 +8,9 @@ given at the start) and when the algorithm is built, the callback recomputes the
 all of it again (idempotent and cheap): the policy mapping on every env runner (each runner's own
 config, as RLlib's `Algorithm.add_module` sets a new mapping there), with the league's members
 and matchmaking weights (rl/league.py), reward mode and filter probabilities on every env, and
-pi's freeze on every learner (requires_grad is not checkpointed). The algorithm's own config,
-frozen by RLlib, keeps the first stage's mapping, which nothing reads once the env runners exist.
+pi's freeze on every learner, learner actors included (requires_grad is not checkpointed). The
+algorithm's own config, frozen by RLlib, keeps the first stage's mapping, which nothing reads
+once the env runners exist.
 
 The callback is built from plain data, the curriculum's name or file (as the run folder's
 `curriculum.json` notes it) and the checkpoint a resumed run starts from: that is all a run's
@@ -40,6 +41,7 @@ from .league import (
     filled_slots,
     league_opponent,
     league_weights,
+    module_of,
     push_modules,
 )
 
@@ -83,7 +85,7 @@ class StageCallback(RLlibCallback):
         for module_id in (LEARNER, *exploiter_of(self.curriculum)):
             algorithm.learner_group.foreach_learner(
                 lambda learner, module_id=module_id:
-                learner.module[module_id].set_pi_frozen(stage.freeze_pi))
+                module_of(learner, module_id).set_pi_frozen(stage.freeze_pi))
         return index
 
     def on_algorithm_init(self, *, algorithm, **kwargs) -> None:
