@@ -1,4 +1,4 @@
-"""`python -m rllib_pommer.bench engine|agents|search|train|layout|learn [--json]`: our speed,
+"""`python -m rllib_pommer.bench engine|agents|search|train|scale|learn [--json]`: our speed,
 side by side.
 
 Each target's measures live beside the code they measure; this job runs them, and for engine and
@@ -14,9 +14,11 @@ agents compares with the reference's figures (tests/reference/reference_speed.js
   (`search_fast`), and the arena's games/s on one worker (`agents/speed.py`, `arena/match.py`);
 - `train`: the quick curriculum's PPO for a few iterations on the real env and on a zero-cost twin
   with the same spaces; env steps/s of both and their ratio (`launch/speed.py`);
-- `layout`: the quick curriculum's PPO on the real env sampled in the learner's process (0 env
-  runners, 1 learner thread) and by 2 remote env runners with 2 learner threads; env steps/s of
-  each and their ratio (`launch/speed.py`; meaningful on an otherwise idle machine);
+- `scale`: the league curriculum's PPO on the real env for every layout a 2-core machine allows
+  (env runners 0/1/2; the learner in the algorithm's process on 1 or 2 threads, or 1 or 2 learner
+  actors): whole-loop env steps/s, sampling's env steps/s and the learner's samples/s alone,
+  memory, ratios to the default layout, and projections to 8, 32 and 128 cores
+  (`launch/scale.py`; meaningful on an otherwise idle machine);
 - `learn`: on a run's torch threads (one), the real RLlib PPO update (pi trainable, and frozen as
   in the value warm-up) and the real behaviour-cloning step, each beside its plain float32 NCHW
   torch baseline, this core's float32 FLOP bound, and the learner connector's seconds on one
@@ -123,11 +125,11 @@ def bench_train() -> dict:
     return train_speeds()
 
 
-def bench_layout() -> dict:
-    """PPO env steps/s with 0 env runners and 1 learner thread beside 2 and 2, one run."""
-    from .launch.speed import layout_speeds  # Ray and torch only for this target
+def bench_scale() -> dict:
+    """The league curriculum's loop, phases and memory for every 2-core layout, one run."""
+    from .launch.scale import scale_speeds  # Ray and torch only for this target
 
-    return layout_speeds()
+    return scale_speeds()
 
 
 def bench_learn() -> dict:
@@ -138,6 +140,13 @@ def bench_learn() -> dict:
 
 
 def _print(title: str, result: dict) -> None:
+    if "layouts" in result:  # bench scale
+        from .launch.scale import scale_table
+
+        print(title)
+        print(scale_table(result))
+        print(f"best: {result['best']} ({result['best_command']})")
+        return
     if not any(key.endswith("_runs") for key in result):
         print(title)
         for key, value in result.items():
@@ -159,8 +168,7 @@ TARGETS = {
     "search": ("search agent: ms per decision vs SimpleAgent (100 games), arena games/s",
                bench_search),
     "train": ("PPO sampling + learning, real env vs zero-cost env", bench_train),
-    "layout": ("PPO env steps/s: 0 env runners + 1 learner thread vs 2 + 2 (an idle machine)",
-               bench_layout),
+    "scale": ("PPO on every layout of env runners and learners (an idle machine)", bench_scale),
     "learn": ("learner samples/s, one torch thread, beside plain-torch baselines", bench_learn),
 }
 

@@ -1,5 +1,5 @@
 """PPO's speed under RLlib, for `bench train` and `bench learn`: the whole loop (real env against a
-zero-cost twin) and the learner.
+zero-cost twin) and the learner (`launch/scale.py` places them on the machine in every way).
 
 `learner_speeds` times the real learner alone: RLlib's `LearnerGroup.update` (learner connector
 with the advantage estimation, then `num_epochs` passes of minibatches of 128 through the real
@@ -8,9 +8,6 @@ pi trainable and with pi frozen (the value warm-up), beside the plain-torch base
 `imitation/speed.py` on the same thread count. Samples/s count learner rows times epochs. It also
 times the learner connector alone on one iteration's episodes, with its `TrainedAgentsOnly` head
 and without it (every agent's rows built, then the fixed seats' dropped, as RLlib does).
-
-`layout_speeds` times the whole loop on the real env for each way of placing it on the machine:
-sampling in the learner's process, or remote env runners sampling while the learner waits.
 
 `train_speeds(iterations)` builds the PPO config of a curriculum (default "quick", first stage:
 all four agents exposed, SimpleAgent opponents as stateful fixed modules, the learner's filters)
@@ -24,7 +21,6 @@ identical, so the ratio of env steps/s says how much of the budget the game and 
 from __future__ import annotations
 
 import copy
-import os
 import statistics
 import tempfile
 import time
@@ -38,14 +34,14 @@ from ray.rllib.execution.rollout_ops import synchronous_parallel_sample
 from ray.tune.registry import register_env
 
 from ..curriculum.curriculum import load_curriculum
-from ..curriculum.names import ENV_NAME, LEARNER, LEARNER_THREADS_ENV
+from ..curriculum.names import ENV_NAME, LEARNER
 from ..curriculum.settings import RunSettings
 from ..imitation import speed as imitation_speed
 from ..imitation.network import PommerNet
 from ..rl.config import build_config
 from ..rl.env import PommeEnv
 from ..rl.trained_agents import every_agent_pipeline
-from .training import cpus_per_env_runner, init_ray
+from .training import init_ray
 
 ZERO_COST_ENV = "pommerman_team_zero_cost"
 
@@ -91,12 +87,12 @@ def _steps_per_second(config, iterations: int) -> tuple[float, float]:
 
 
 @contextmanager
-def _random_pi_weights() -> Iterator[Path]:
-    """Ray running (started here unless it is already) and a random pi's weights file: speed
-    does not depend on the weights."""
+def random_pi_weights(num_cpus: int = RunSettings.num_cpus) -> Iterator[Path]:
+    """Ray running (started here with `num_cpus` CPUs unless it is already) and a random pi's
+    weights file: speed does not depend on the weights."""
     started_ray = not ray.is_initialized()
     if started_ray:
-        init_ray(None)
+        init_ray(None, num_cpus=num_cpus)
     try:
         with tempfile.TemporaryDirectory() as tmp:
             weights = Path(tmp) / "pi.pt"
@@ -109,7 +105,7 @@ def _random_pi_weights() -> Iterator[Path]:
 
 def train_speeds(iterations: int = 3, curriculum: str = "quick") -> dict:
     """Env steps/s of PPO on the real and the zero-cost env, and their ratio."""
-    with _random_pi_weights() as weights:
+    with random_pi_weights() as weights:
         plan = load_curriculum(curriculum)
         real, episode_length = _steps_per_second(
             build_config(plan, pi_weights=weights, env=ENV_NAME), iterations)
@@ -123,37 +119,12 @@ def train_speeds(iterations: int = 3, curriculum: str = "quick") -> dict:
             "ratio": round(real / zero, 3)}
 
 
-def layout_speeds(iterations: int = 5, curriculum: str = "quick",
-                  layouts: tuple[tuple[int, int], ...] = ((0, 1), (2, 2))) -> dict:
-    """Env steps/s of the whole PPO loop on the real env for each (remote env runners, learner
-    torch threads), side by side in one Ray instance of `RunSettings.num_cpus` CPUs: how a run
-    that has the machine to itself should use it (launch/training.cpus_per_env_runner)."""
-    result = {"curriculum": curriculum, "iterations": iterations}
-    with _random_pi_weights() as weights:
-        plan = load_curriculum(curriculum)
-        for runners, threads in layouts:
-            layout = RunSettings(num_env_runners=runners, torch_threads=threads)
-            config = build_config(plan, pi_weights=weights, num_env_runners=runners,
-                                  cpus_per_env_runner=cpus_per_env_runner(layout))
-            os.environ[LEARNER_THREADS_ENV] = str(threads)  # read by the learner in this process
-            try:
-                speed, _ = _steps_per_second(config, iterations)
-            finally:
-                del os.environ[LEARNER_THREADS_ENV]
-            result[f"env_steps_per_s_{runners}_runners_{threads}_threads"] = round(speed, 1)
-    first, *others = [k for k in result if k.startswith("env_steps")]
-    for key in others:
-        ratio = result[key] / result[first]
-        result[f"ratio_{key.removeprefix('env_steps_per_s_')}"] = round(ratio, 3)
-    return result
-
-
-def _learner_rows(episodes) -> int:
+def learner_rows(episodes) -> int:
     return sum(len(e) for episode in episodes for e in episode.agent_episodes.values()
                if e.module_id == LEARNER)
 
 
-def _sample_iteration(algo) -> list:
+def sample_iteration(algo) -> list:
     """One training batch's episodes, sampled as the algorithm's iteration does."""
     return synchronous_parallel_sample(
         worker_set=algo.env_runner_group, max_env_steps=algo.config.total_train_batch_size,
@@ -165,14 +136,14 @@ def _learner_samples_per_s(algo, frozen: bool, updates: int) -> float:
     algo.learner_group.foreach_learner(lambda l: l.module[LEARNER].set_pi_frozen(frozen))
     samples = seconds = 0.0
     for update in range(updates + 1):  # the first update is a warm-up
-        episodes = _sample_iteration(algo)
+        episodes = sample_iteration(algo)
         start = time.perf_counter()
         algo.learner_group.update(episodes=episodes, num_epochs=config.num_epochs,
                                   minibatch_size=config.minibatch_size,
                                   shuffle_batch_per_epoch=True)
         if update:
             seconds += time.perf_counter() - start
-            samples += _learner_rows(episodes) * config.num_epochs
+            samples += learner_rows(episodes) * config.num_epochs
     return samples / seconds
 
 
@@ -182,7 +153,7 @@ def _connector_seconds(algo, repeats: int) -> dict:
     learner = algo.learner_group._learner  # the local learner: no remote learners here
     full = learner._learner_connector
     all_agents = every_agent_pipeline(full)
-    episodes = _sample_iteration(algo)
+    episodes = sample_iteration(algo)
     times = {"trained_agents": [], "all_agents": []}
     for _ in range(repeats):
         for name, pipeline in (("trained_agents", full), ("all_agents", all_agents)):
@@ -199,7 +170,7 @@ def _connector_seconds(algo, repeats: int) -> dict:
 def _rllib_learner_speeds(updates: int, curriculum: str) -> dict:
     """Learner samples/s of the real RLlib update, pi trainable and pi frozen, and the seconds
     of its connector."""
-    with _random_pi_weights() as weights:
+    with random_pi_weights() as weights:
         algo = build_config(load_curriculum(curriculum), pi_weights=weights).build_algo()
         try:
             trainable = _learner_samples_per_s(algo, False, updates)
