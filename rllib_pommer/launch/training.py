@@ -140,6 +140,8 @@ def start_run(settings: RunSettings, say=print) -> tuple[Curriculum, Path, Path 
         if settings.address is not None:
             check_cluster_fits(settings)
         check_gpus(settings)
+        if settings.address is not None:
+            check_learner_fits_a_node(settings)
     except ValueError:
         ray.shutdown()  # leave the cluster (or end our own Ray) before the error ends the command
         raise
@@ -156,7 +158,8 @@ def check_cluster_fits(settings: RunSettings) -> None:
     printing "insufficient resources" every minute. The run asks for the algorithm's process
     (one CPU, or its learner's `--num-cpus-per-learner` where it holds the learner), each
     learner actor's `--num-cpus-per-learner`, and `cpus_per_env_runner` for each remote
-    runner."""
+    runner, counted over all the nodes (`check_learner_fits_a_node` checks that a learner fits
+    one)."""
     free = ray.available_resources().get("CPU", 0.0)
     runners = settings.num_env_runners * cpus_per_env_runner(settings)
     fixed = settings.main_process_cpus + settings.learner_cpus
@@ -172,6 +175,33 @@ def check_cluster_fits(settings: RunSettings) -> None:
             f"--num-env-runners {settings.num_env_runners}): "
             + (f"pass --num-env-runners {fits} or fewer, or " if free >= fixed else "")
             + "free or add CPUs")
+
+
+def check_learner_fits_a_node(settings: RunSettings) -> None:
+    """Refuse a learner that no single node of the cluster can hold. Its CPUs and GPUs are one
+    bundle, which Ray places on one node, so a learner asking for more than any node has would
+    wait for ever as well, however many the nodes have together. (One CPU and no GPU, what an
+    env runner asks for, fits any node with a CPU.)"""
+    gpus = settings.num_gpus_per_learner
+    cpus = settings.num_cpus_per_learner if settings.num_learners else settings.main_process_cpus
+    if cpus <= 1 and not gpus:
+        return
+    nodes = [node["Resources"] for node in ray.nodes() if node["Alive"]]
+    if any(node.get("CPU", 0.0) + 1e-9 >= cpus and node.get("GPU", 0.0) + 1e-9 >= gpus
+           for node in nodes):
+        return
+    most_cpus = max((node.get("CPU", 0.0) for node in nodes), default=0.0)
+    most_gpus = max((node.get("GPU", 0.0) for node in nodes), default=0.0)
+    who = (f"each of --num-learners {settings.num_learners}" if settings.num_learners
+           else "the learner in the algorithm's process")
+    flags = f"--num-cpus-per-learner {settings.num_cpus_per_learner:g}" + (
+        f", --num-gpus-per-learner {gpus:g}" if gpus else "")
+    raise ValueError(
+        f"the Ray cluster at {settings.address!r} has no node with {cpus:g} CPUs"
+        + (f" and {gpus:g} GPUs" if gpus else "") + f" for {who} ({flags}), which Ray places "
+        f"on one node; its nodes have at most {most_cpus:g} CPUs"
+        + (f" and {most_gpus:g} GPUs" if gpus else "") + ": ask for that or less, or add a "
+        "bigger node")
 
 
 def check_gpus(settings: RunSettings) -> None:

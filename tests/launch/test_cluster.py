@@ -1,10 +1,11 @@
-"""`train --address` on a Ray cluster of three nodes on this machine: Ray's own test utility
-(`ray.cluster_utils.Cluster`, run by tests/launch/ray_cluster.py) starts a head and two worker
-nodes of one logical CPU each, every node with a custom resource that names it. A run asking for
-more CPUs than the three nodes have together is refused up front, in one line; a run with two
-remote env runners trains on the cluster with each of its actors on a node of its own, stops at
-a checkpoint with `train --stop`, and, once the cluster is gone with every process of its
-session, resumes from its data on a Ray instance of its own."""
+"""`train --address` on a Ray cluster of five nodes on this machine: Ray's own test utility
+(`ray.cluster_utils.Cluster`, run by tests/launch/ray_cluster.py) starts a head and four worker
+nodes of one logical CPU each, every node with a custom resource that names it. Runs the cluster
+cannot hold are refused up front, in one line: more CPUs than the five nodes have together, and
+a learner bigger than any one node. A run with two learner actors and two remote env runners
+trains on the cluster with each of its five actors on a node of its own, stops at a checkpoint
+with `train --stop`, and, once the cluster is gone with every process of its session, resumes
+from its data on a Ray instance of its own, with neither learner actors nor runners."""
 
 from __future__ import annotations
 
@@ -21,8 +22,11 @@ from collections import Counter
 from pathlib import Path
 
 import pytest
+import ray
 
+from rllib_pommer.curriculum.settings import RunSettings
 from rllib_pommer.launch import ray_session
+from rllib_pommer.launch.training import check_learner_fits_a_node
 from rllib_pommer.runs.checkpoints import checkpoint_complete, checkpoint_iteration
 from rllib_pommer.runs.history import legs
 
@@ -30,12 +34,14 @@ from .ray_cluster import session_processes
 
 REPO = Path(__file__).resolve().parents[2]
 HELPER = Path(__file__).with_name("ray_cluster.py")
-# One logical CPU per node, so that the run's three actors (the algorithm with its learner, two
+# One logical CPU per node, so that the run's five actors (the algorithm's, two learners, two
 # env runners) can only be placed one to a node.
-NODES = [{"CPU": 1, "head": 1}, {"CPU": 1, "worker_a": 1}, {"CPU": 1, "worker_b": 1}]
+NODE_NAMES = ["head", "worker_a", "worker_b", "worker_c", "worker_d"]
+NODES = [{"CPU": 1, name: 1} for name in NODE_NAMES]
 START_S = 400.0  # for the cluster to come up, on a loaded machine too
 RUN_S = 400.0  # for a training command to reach what the test waits for
 RUNNER = "MultiAgentEnvRunner"
+LEARNER = "create_executable_class.<locals>._WrappedExecutable"  # RLlib's, in Ray Train's wrapper
 
 
 class RayCluster:
@@ -145,7 +151,7 @@ def _results(trial: Path) -> list[dict]:
 
 
 @pytest.mark.timeout(900)
-def test_a_run_trains_on_three_nodes_then_resumes_on_a_ray_of_its_own(tmp_path, pi_weights):
+def test_a_run_trains_on_five_nodes_then_resumes_on_a_ray_of_its_own(tmp_path, pi_weights):
     curriculum = tmp_path / "long_smoke.toml"
     smoke = (REPO / "curriculum" / "smoke.toml").read_text()
     assert 'opponent = "static"\nepisodes = 12' in smoke
@@ -154,21 +160,36 @@ def test_a_run_trains_on_three_nodes_then_resumes_on_a_ray_of_its_own(tmp_path, 
     out = tmp_path / "run"
     start = ["--curriculum", str(curriculum), "--pi-weights", str(pi_weights)]
     with RayCluster(NODES, tmp_path / "cluster.log") as cluster:
-        assert sorted(cluster.nodes) == ["head", "worker_a", "worker_b"]
+        assert sorted(cluster.nodes) == NODE_NAMES
         address = ["--address", cluster.address]
-        # 1 CPU for the algorithm's process and 3 for the runners; the nodes have 3 together.
-        refused = subprocess.run(_train(tmp_path / "too_big", *start, *address,
-                                        "--num-env-runners", "3"),
-                                 cwd=REPO, capture_output=True, text=True, timeout=RUN_S)
-        assert refused.returncode == 2, refused.stderr[-3000:]
-        errors = [line for line in refused.stderr.splitlines() if "error:" in line]
-        assert len(errors) == 1 and "Traceback" not in refused.stderr, refused.stderr[-3000:]
-        assert errors[0].startswith(
-            f"python -m rllib_pommer.train: error: the Ray cluster at {cluster.address!r} has "
-            f"3 free CPUs; the run asks for 4 ("), errors[0]
-        assert "pass --num-env-runners 2 or fewer" in errors[0]
+        # 1 CPU for the algorithm's process, 2 for the learners and 3 for the runners, where the
+        # nodes have 5 together; a learner of 2 CPUs, where each node has 1 (3 CPUs in all).
+        refusals = {"runners": ["--num-learners", "2", "--num-env-runners", "3"],
+                    "learner": ["--num-learners", "1", "--num-cpus-per-learner", "2"]}
+        refusing = {name: subprocess.Popen(_train(tmp_path / name, *start, *address, *options),
+                                           cwd=REPO, stdout=subprocess.DEVNULL,
+                                           stderr=subprocess.PIPE, text=True)
+                    for name, options in refusals.items()}
+        said = {name: process.communicate(timeout=RUN_S) for name, process in refusing.items()}
+        for name, process in refusing.items():
+            err = said[name][1]
+            assert process.returncode == 2 and "Traceback" not in err, err[-3000:]
+            errors = [line for line in err.splitlines() if "error:" in line]
+            assert len(errors) == 1, err[-3000:]
+            assert not (tmp_path / name).exists()
+            said[name] = errors[0].removeprefix(
+                f"python -m rllib_pommer.train: error: the Ray cluster at {cluster.address!r} ")
+        assert said["runners"] == (
+            "has 5 free CPUs; the run asks for 6 (1 for the algorithm's process, 2 for "
+            "--num-learners 2, 3 for --num-env-runners 3): pass --num-env-runners 2 or fewer, "
+            "or free or add CPUs"), said["runners"]
+        assert said["learner"] == (
+            "has no node with 2 CPUs for each of --num-learners 1 (--num-cpus-per-learner 2), "
+            "which Ray places on one node; its nodes have at most 1 CPUs: ask for that or less, "
+            "or add a bigger node"), said["learner"]
 
-        process = subprocess.Popen(_train(out, *start, *address, "--num-env-runners", "2"),
+        process = subprocess.Popen(_train(out, *start, *address, "--num-learners", "2",
+                                          "--num-env-runners", "2"),
                                    cwd=REPO, stdout=subprocess.DEVNULL,
                                    stderr=subprocess.DEVNULL, start_new_session=True)
         try:
@@ -181,16 +202,19 @@ def test_a_run_trains_on_three_nodes_then_resumes_on_a_ray_of_its_own(tmp_path, 
         left = cluster.stop()
 
     assert left == [] and session_processes(session_dir) == []
-    # Every actor the cluster ever had is the run's (the refused run made none), each on a node
-    # of its own: the runners sampled on the two nodes beside the learner's.
-    assert Counter(actor["class"] for actor in actors) == {"PPO": 1, RUNNER: 2}, actors
-    assert sorted(actor["node"] for actor in actors) == ["head", "worker_a", "worker_b"], actors
-    assert len({actor["pid"] for actor in actors}) == 3
+    # Every actor the cluster ever had is the run's (the refused runs made none), each on a node
+    # of its own: the learners updated, and the runners sampled, on nodes apart from each other
+    # and from the algorithm's.
+    assert Counter(actor["class"] for actor in actors) == {"PPO": 1, LEARNER: 2, RUNNER: 2}, \
+        actors
+    assert sorted(actor["node"] for actor in actors) == NODE_NAMES, actors
+    assert len({actor["pid"] for actor in actors}) == len(NODE_NAMES)
     cluster_rows = _results(on_cluster.parent)
     assert {row["fault_tolerance"]["num_healthy_workers"] for row in cluster_rows} == {2}
     assert cluster_rows[-1]["training_iteration"] >= 2
 
-    # On a Ray instance of its own (no --address, no runners), from the cluster's checkpoint.
+    # On a Ray instance of its own (no --address, no learner actors, no runners), from the
+    # checkpoint the cluster's learners wrote.
     log = tmp_path / "resume.log"
     with open(log, "w") as stderr:
         process = subprocess.Popen(_train(out, "--resume"), cwd=REPO, stdout=subprocess.DEVNULL,
@@ -210,3 +234,26 @@ def test_a_run_trains_on_three_nodes_then_resumes_on_a_ray_of_its_own(tmp_path, 
     assert first["curriculum"]["episodes"] > at_checkpoint["curriculum"]["episodes"]
     assert first["curriculum"]["stage_name"] == "static"
     assert first["fault_tolerance"]["num_healthy_workers"] == 0
+
+
+def test_a_learner_no_single_node_holds_is_refused(monkeypatch):
+    """Ray places a learner's CPUs and GPUs on one node: enough of them over all the nodes is
+    not enough (and a dead node holds nothing)."""
+    nodes = [{"Alive": True, "Resources": {"CPU": 4.0, "GPU": 1.0}},
+             {"Alive": True, "Resources": {"CPU": 4.0, "GPU": 1.0}},
+             {"Alive": False, "Resources": {"CPU": 64.0, "GPU": 8.0}}]
+    monkeypatch.setattr(ray, "nodes", lambda: nodes)
+    fits = RunSettings(address="auto", num_learners=2, num_cpus_per_learner=4,
+                       num_gpus_per_learner=1)
+    check_learner_fits_a_node(fits)  # one learner on each node
+    with pytest.raises(ValueError, match=r"has no node with 1 CPUs and 2 GPUs for each of "
+                                         r"--num-learners 1 \(--num-cpus-per-learner 1, "
+                                         r"--num-gpus-per-learner 2\), which Ray places on one "
+                                         r"node; its nodes have at most 4 CPUs and 1 GPUs"):
+        check_learner_fits_a_node(RunSettings(address="auto", num_learners=1,
+                                              num_gpus_per_learner=2))
+    with pytest.raises(ValueError, match=r"has no node with 6 CPUs for the learner in the "
+                                         r"algorithm's process \(--num-cpus-per-learner 6\)"):
+        check_learner_fits_a_node(RunSettings(address="auto", num_cpus_per_learner=6))
+    monkeypatch.setattr(ray, "nodes", lambda: pytest.fail("a one-CPU learner needs no look"))
+    check_learner_fits_a_node(RunSettings(address="auto", num_learners=3))
