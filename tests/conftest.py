@@ -1,5 +1,6 @@
 """Shared test fixtures: where the recorded reference data live (tests/reference/, in the repo,
-so every clone proves the engine's fidelity; tests/reference/README.md says what each file is)."""
+so every clone proves the engine's fidelity; tests/reference/README.md says what each file is),
+and for the tests that train, one Ray instance (2 CPUs, no dashboard) and throwaway pi weights."""
 
 from __future__ import annotations
 
@@ -59,3 +60,28 @@ def radio_policy(tmp_path):
                         f'description = "a radio net for tests"\n')
         return path
     return write
+
+
+@pytest.fixture(scope="session")
+def ray_session():
+    import ray
+    import torch
+
+    torch.set_num_threads(1)
+    torch.set_flush_denormal(True)
+    ray.init(address="local", num_cpus=2, include_dashboard=False)
+    yield
+    ray.shutdown()
+
+
+@pytest.fixture(scope="session")
+def pi_weights(tmp_path_factory):
+    """A randomly initialised PommerNet state_dict (never the shipped imitation weights)."""
+    import torch
+
+    from rllib_pommer.imitation.network import PommerNet
+
+    torch.manual_seed(0)
+    path = tmp_path_factory.mktemp("weights") / "pi.pt"
+    torch.save(PommerNet().state_dict(), path)
+    return path

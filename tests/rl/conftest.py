@@ -1,4 +1,4 @@
-"""One Ray instance for the RL tests (2 CPUs, no dashboard), throwaway pi weights, an env that
+"""For the RL tests (beside tests/conftest.py's Ray instance and throwaway pi weights): an env that
 reports what it executed, a smoke run of a curriculum, and the project's campaign run as
 committed."""
 
@@ -14,7 +14,6 @@ import pytest
 import torch
 from ray.tune.registry import register_env
 
-from rllib_pommer.imitation.network import PommerNet
 from rllib_pommer.rl.env import PommeEnv
 
 ECHO_ENV = "pommerman_echo"
@@ -32,26 +31,6 @@ class EchoEnv(PommeEnv):
 
 
 register_env(ECHO_ENV, EchoEnv)
-
-
-@pytest.fixture(scope="session")
-def ray_session():
-    import ray
-
-    torch.set_num_threads(1)
-    torch.set_flush_denormal(True)
-    ray.init(address="local", num_cpus=2, include_dashboard=False)
-    yield
-    ray.shutdown()
-
-
-@pytest.fixture(scope="session")
-def pi_weights(tmp_path_factory):
-    """A randomly initialised PommerNet state_dict (never the shipped imitation weights)."""
-    torch.manual_seed(0)
-    path = tmp_path_factory.mktemp("weights") / "pi.pt"
-    torch.save(PommerNet().state_dict(), path)
-    return path
 
 
 def snapshot(module) -> dict:
