@@ -81,7 +81,7 @@ def test_dagger_needs_label_draws_and_known_opponents(tmp_path):
 
 def _ppo_run(tmp_path) -> tuple:
     """A PPO run folder as `train` leaves it (tests/runs/test_export.py) whose learner bombs."""
-    from ..rl.test_export import _fake_run
+    from ..runs.test_export import _fake_run
 
     torch.manual_seed(1)
     net = PommerNet()
