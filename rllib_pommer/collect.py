@@ -7,6 +7,14 @@ shards DIR/shard-NNNNNN.parquet of --shard-games games each (schema: rllib_pomme
 read them with rllib_pommer.data.dataset.open_dataset). Same --seed, same dataset, whatever
 --workers. Re-running the same command resumes: finished shards are kept, the rest are played.
 
+With --expert search (or search_fast, or any policy file of kind search), four search agents
+at the file's effort play instead (docs/search.md), seated and seeded as in the arena, and each
+row's action is the one its agent played: the same rows and planes, so `imitate` trains on them
+unchanged. The search agent breaks ties and near-ties (values within 1) with a draw from its
+seeded stream; --label-draws does not apply. Search games are slow (docs/measurements.md), so
+their shards default to 16 games. The shards name their expert and its effort, and a directory
+holding another expert's shards is refused.
+
 With --dagger POLICY, the learned policy plays instead (its team on seats {0, 2} and {1, 3} in
 turn, against the --vs opponents in turn) and only its decisions are recorded, each labelled with
 what SimpleAgent would have done there (rllib_pommer/data/dagger.py).
@@ -21,7 +29,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from .data.collector import SHARD_GAMES, Collection, Dagger, ShardResult
+from .data.collector import SEARCH_SHARD_GAMES, SHARD_GAMES, Collection, Dagger, ShardResult
 from .util.cli_options import positive_int
 from .util.errors import report_error
 from .util.outputs import check_output_dir
@@ -35,7 +43,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--workers", type=positive_int, default=None,
                         help="processes (default: cores)")
-    parser.add_argument("--shard-games", type=positive_int, default=SHARD_GAMES)
+    parser.add_argument("--shard-games", type=positive_int, default=None,
+                        help=f"games per shard (default: {SHARD_GAMES}; {SEARCH_SHARD_GAMES} "
+                             "with a search expert)")
+    parser.add_argument("--expert", default="simple",
+                        help="who plays all four seats: simple, or a policy of kind search "
+                             "(search, search_fast, a .toml file) (default: %(default)s)")
     parser.add_argument("--label-draws", type=int, default=0, metavar="K",
                         help="also record SimpleAgent's action counts over K draws from the same "
                              "memory per decision, the soft targets of imitation (0..255)")
@@ -51,17 +64,20 @@ def main(argv: list[str] | None = None) -> int:
         from .imitation.learned import greedy_actor  # torch, for DAgger only
 
         dagger = Dagger(args.dagger, tuple(args.vs.split(",")), greedy_actor)
+    shard_games = args.shard_games or (SHARD_GAMES if args.expert == "simple"
+                                       else SEARCH_SHARD_GAMES)
     try:
         check_output_dir(args.out, "--out")
-        collection = Collection(args.out, args.games, args.seed, args.shard_games,
-                                args.label_draws, dagger)
+        collection = Collection(args.out, args.games, args.seed, shard_games,
+                                args.label_draws, dagger, args.expert)
     except ValueError as exc:
         return report_error(exc)
     resumed = sum(r.games for r in collection.results.values())
     resumed_samples = samples = sum(r.samples for r in collection.results.values())
     start = time.perf_counter()
-    with tqdm(total=args.games, initial=resumed, unit="game", file=sys.stderr,
-              smoothing=0.1) as bar:
+    expert = collection.plan.template.expert
+    with tqdm(total=args.games, initial=resumed, unit="game", file=sys.stderr, smoothing=0.1,
+              desc=None if args.expert == "simple" else expert) as bar:
         bar.set_postfix(samples=samples)
 
         def progress(result: ShardResult) -> None:

@@ -26,7 +26,7 @@ import pyarrow.parquet as pq
 from ..game.constants import TEAM_PRESET
 from ..util.parallel import map_unordered
 from .dagger import Actor, check_setup, play_dagger_games
-from .expert import play_games
+from .expert import SearchExpert, parse_effort, play_games, play_search_games
 from .schema import (
     SHARD_GLOB,
     Samples,
@@ -39,6 +39,7 @@ from .schema import (
 )
 
 SHARD_GAMES = 128  # ~110,000 samples: a worker peaks ~300 MB above its base; ~1.7 MB on disk
+SEARCH_SHARD_GAMES = 16  # search games are slow: a shard of minutes, not of hours, per worker
 TEMP_GLOB = ".shard-*.tmp"
 
 
@@ -71,12 +72,25 @@ def _sha256(path: Path) -> str:
 
 
 def plan_shards(games: int, seed: int, shard_games: int, label_draws: int = 0,
-                dagger: Dagger | None = None) -> ShardPlan:
+                dagger: Dagger | None = None, expert: str = "simple") -> ShardPlan:
+    """The shards of a dataset: `games` games from `seed`, `shard_games` a shard, played by four
+    `expert`s ("simple", or a policy of kind "search") or by DAgger's clone (labelled by
+    SimpleAgent); a ValueError says what does not fit together."""
     if games <= 0 or shard_games <= 0:
         raise ValueError(f"games and shard_games must be positive, got {games}, {shard_games}")
     if not 0 <= label_draws < 256:
         raise ValueError(f"label_draws must be in 0..255, got {label_draws}")
     players = {}
+    if expert != "simple":
+        if dagger is not None:
+            raise ValueError(f"expert {expert!r}: DAgger data are labelled by SimpleAgent "
+                             "(leave out --expert)")
+        if label_draws:
+            raise ValueError(f"expert {expert!r}: --label-draws counts SimpleAgent's "
+                             "tie-breaks; a search expert's label is the action it plays "
+                             "(leave out --label-draws)")
+        searcher = SearchExpert.resolve(expert)
+        players = {"agents": "search", "policy": searcher.name, "effort": searcher.effort_text}
     if dagger is not None:
         check_setup(dagger.opponents, label_draws)
         _, weights = dagger.actor_of(dagger.policy)
@@ -106,6 +120,8 @@ class ShardPlan(Sequence):
 
 def _play(meta: ShardMeta, actor_of: ActorOf | None) -> Samples:
     games = range(meta.first_game, meta.stop_game)
+    if meta.agents == "search":
+        return play_search_games(meta.seed, games, parse_effort(meta.effort))
     if meta.agents != "dagger":
         return play_games(meta.seed, games, label_draws=meta.label_draws)
     if actor_of is None:
@@ -154,10 +170,10 @@ def _intact(path: Path) -> tuple[pq.ParquetFile, ShardMeta] | None:
     return shard, meta
 
 
-def finished_shards(out_dir: Path, plan: list[ShardMeta]) -> dict[int, ShardResult]:
-    """The planned shards already in `out_dir`; ValueError if a shard there belongs elsewhere.
-    A damaged shard (cut short, or a page that fails its checksum) is deleted, to be played
-    again."""
+def finished_shards(out_dir: Path, plan: ShardPlan) -> dict[int, ShardResult]:
+    """The planned shards already in `out_dir`; ValueError if a shard there belongs elsewhere
+    (first of all to another expert's data: experts are never mixed). A damaged shard (cut
+    short, or a page that fails its checksum) is deleted, to be played again."""
     done = {}
     for path in sorted(out_dir.glob(SHARD_GLOB)):
         intact = _intact(path)
@@ -166,6 +182,10 @@ def finished_shards(out_dir: Path, plan: list[ShardMeta]) -> dict[int, ShardResu
             path.unlink()
             continue
         shard, meta = intact
+        if meta.expert != plan.template.expert:
+            raise ValueError(f"{path}: collected by expert {meta.expert}; this run's expert is "
+                             f"{plan.template.expert}: resume with the same expert, or collect "
+                             "into a new directory")
         index = shard_index(path.name)
         index = index if index is not None and index < len(plan) else None
         if index is None or meta != plan[index]:
@@ -190,10 +210,10 @@ class Collection:
 
     def __init__(self, out_dir: Path, games: int, seed: int = 0,
                  shard_games: int = SHARD_GAMES, label_draws: int = 0,
-                 dagger: Dagger | None = None):
+                 dagger: Dagger | None = None, expert: str = "simple"):
         self.out_dir = out_dir
         self.actor_of = dagger.actor_of if dagger else None
-        self.plan = plan_shards(games, seed, shard_games, label_draws, dagger)
+        self.plan = plan_shards(games, seed, shard_games, label_draws, dagger, expert)
         out_dir.mkdir(parents=True, exist_ok=True)
         self.results = finished_shards(out_dir, self.plan)
 

@@ -11,8 +11,8 @@ Rows are sorted by (game, agent_id, step_count), so consecutive rows are one age
 views, which differ in a few cells: zstd then stores a sample in about 15 bytes.
 
 Every shard carries two key/value metadata entries: `rllib_pommer.schema_version` (SCHEMA_VERSION)
-and `rllib_pommer.shard`, a JSON object saying what the shard covers (see `ShardMeta`). Shards of
-schema 1 (no `action_counts`) still read, with zero counts.
+and `rllib_pommer.shard`, a JSON object saying what the shard covers and who played it (see
+`ShardMeta`). Shards of schema 1 (no `action_counts`) still read, with zero counts.
 """
 
 from __future__ import annotations
@@ -91,19 +91,43 @@ class ShardMeta:
     shard_games: int
     board_size: int
     game_type: str = "team"
-    agents: str = "simple"
+    agents: str = "simple"  # "simple", "search" (four search agents) or "dagger"
     label_draws: int = 0  # SimpleAgent draws behind each row's action_counts (0: none)
     # DAgger shards (agents = "dagger"): the clone that played, the sha256 of its weights and
-    # its opponents (comma-separated); see data/dagger.py.
+    # its opponents (comma-separated); see data/dagger.py. Search shards (agents = "search"):
+    # `policy` is the search policy's name.
     policy: str = ""
     policy_sha256: str = ""
     opponents: str = ""
+    # Search shards: the effort they were played at, "depth=D horizon=H recall=R"
+    # (data/expert.format_effort). Written only when set, so the metadata of other shards is
+    # what it was before search shards existed.
+    effort: str = ""
+
+    @property
+    def expert(self) -> str:
+        """Who played the shard's games: "simple", the search policy and its effort, or DAgger's
+        clone and its opponents."""
+        if self.agents == "dagger":
+            return f"dagger ({self.policy} {self.policy_sha256[:8]} vs {self.opponents})"
+        if self.agents == "search":
+            return f"{self.policy} (search, {self.effort})"
+        return self.agents
 
     def __str__(self) -> str:
-        players = (f"dagger ({self.policy} {self.policy_sha256[:8]} vs {self.opponents})"
-                   if self.agents == "dagger" else self.agents)
-        return (f"{players} {self.game_type} games {self.first_game}..{self.stop_game - 1} "
+        return (f"{self.expert} {self.game_type} games {self.first_game}..{self.stop_game - 1} "
                 f"of seed {self.seed} in shards of {self.shard_games}")
+
+
+OPTIONAL_META = ("effort",)  # ShardMeta fields left out of the metadata while empty
+
+
+def meta_json(meta: ShardMeta) -> str:
+    """The shard's `rllib_pommer.shard` metadata entry: `meta` as a JSON object, without the
+    OPTIONAL_META fields that are empty."""
+    fields = {key: value for key, value in asdict(meta).items()
+              if key not in OPTIONAL_META or value}
+    return json.dumps(fields)
 
 
 def shard_name(index: int) -> str:
@@ -156,7 +180,7 @@ def encode(samples: Samples, meta: ShardMeta) -> pa.Table:
         columns[name] = _fixed_size(values.view(np.uint8)) if values.ndim > 1 else values
     table = pa.table({name: columns[name] for name in COLUMNS})
     return table.replace_schema_metadata({VERSION_KEY: str(SCHEMA_VERSION),
-                                          SHARD_KEY: json.dumps(asdict(meta))})
+                                          SHARD_KEY: meta_json(meta)})
 
 
 def decode_columns(table: pa.Table, board_size: int) -> dict[str, np.ndarray]:
