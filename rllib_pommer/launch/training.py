@@ -13,9 +13,10 @@ as a new run's is, loads that checkpoint's state when it is built (rl/stages.py)
 follows from the restored lifetime episode count, stage, counters, league and iteration pick up
 where they were; the run's history reads its legs as one (runs/history.py). Nothing Tune pickled
 (its experiment state, `params.pkl`) is read again, so a run resumes after our modules moved,
-and with another number of env runners. Tune saves its state and copies the trial's result files
-to the run folder every 10 s (`SNAPSHOT_PERIOD_S`); what saving on every controller step costs is
-in docs/measurements.md.
+and with another layout: env runners, learner actors and GPUs (a checkpoint holds the first
+learner's state whatever the number of learners). Tune saves its state and copies the trial's
+result files to the run folder every 10 s (`SNAPSHOT_PERIOD_S`); what saving on every controller
+step costs is in docs/measurements.md.
 
 A run outlives the machine it ran on: `packing.py` stops it at a checkpoint and packs its folder
 for `--resume` anywhere.

@@ -54,7 +54,11 @@ counts instead, over all learners, the rows of the modules it trains, so an iter
 many optimizer steps as one learner takes on the whole batch (rl/config.py splits the batch and
 the minibatch); a learner whose shard holds none of those rows steps through as many empty
 minibatches, taking the others' gradients (RLlib's own loop would fail on it, and the others
-would wait in the all-reduce for ever). A learner actor runs on the CPUs it holds
+would wait in the all-reduce for ever); a learner whose update fails ends the process group, so
+that the others' all-reduce fails at once too and the error reaches the run, where they would
+wait for the group's time-out (30 minutes). RLlib shards by slicing episodes, which can leave a
+trained agent a slice without a step; `TrainedAgentsOnly` drops those (RLlib's connector fails
+on them). A learner actor runs on the CPUs it holds
 (`--num-cpus-per-learner`, one thread at least), the learner in the algorithm's process on
 `--torch-threads`.
 
@@ -167,6 +171,14 @@ class PommerPPOLearner(PPOTorchLearner):
         self.apply_gradients(self.postprocess_gradients(gradients))
         return fwd_out, loss_per_module, {}
 
+    def update(self, *args, **kwargs):
+        try:
+            return super().update(*args, **kwargs)
+        except Exception:
+            if self.distributed and dist.is_initialized():  # the others fail, not wait for ever
+                dist.destroy_process_group()
+            raise
+
     def _create_iterator_if_necessary(self, *, training_data, num_total_minibatches=0,
                                       num_epochs=1, minibatch_size=None, **kwargs):
         batches = super()._create_iterator_if_necessary(
@@ -245,3 +257,4 @@ class PommerPPOLearner(PPOTorchLearner):
         for module_id, module in self.module.items():
             if self.should_module_be_updated(module_id):
                 module.unwrapped().require_pi()
+

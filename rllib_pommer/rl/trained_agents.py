@@ -9,7 +9,10 @@ bit-identical (tests/rl/test_trained_agents.py) and the connector several times 
 
 The piece hands the rest of the pipeline a view of each multi-agent episode holding only the
 trained agents' single-agent episodes; the episodes themselves are left whole, since the env
-runner still sums their chunks into the episode metrics. `PommerPPOLearner.build` puts it at the
+runner still sums their chunks into the episode metrics. It also leaves out a trained agent's
+episode without a step, which RLlib's `AddOneTsToEpisodesAndTruncate` fails on: an env runner
+sends none, but with several learners RLlib shards an iteration's episodes by slicing them, and a
+slice may fall after the agent's death (rl/learner.py). `PommerPPOLearner.build` puts it at the
 head of its pipeline, so a run resumed from a config saved before the piece existed gets it too.
 """
 
@@ -25,8 +28,8 @@ from ray.rllib.env.multi_agent_episode import MultiAgentEpisode
 
 class TrainedAgentsOnly(ConnectorV2):
     """Learner piece: replaces each multi-agent episode in `episodes` by a shallow view whose
-    agents are those mapped to a module `trained(module_id)` accepts (the env-step length, and
-    so the learner's env-step count, is unchanged)."""
+    agents are those mapped to a module `trained(module_id)` accepts and with a step in it (the
+    env-step length, and so the learner's env-step count, is unchanged)."""
     def __init__(self, trained: Callable[[str], bool], **kwargs):
         super().__init__(**kwargs)
         self._trained = trained
@@ -41,7 +44,7 @@ class TrainedAgentsOnly(ConnectorV2):
     def _view(self, episode: MultiAgentEpisode) -> MultiAgentEpisode:
         view = copy.copy(episode)
         view.agent_episodes = {agent: single for agent, single in episode.agent_episodes.items()
-                               if self._trained(single.module_id)}
+                               if self._trained(single.module_id) and len(single)}
         return view
 
 

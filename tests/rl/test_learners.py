@@ -19,13 +19,14 @@ from rllib_pommer.curriculum.names import EXPLOITER, LEARNER
 from rllib_pommer.curriculum.settings import RunSettings
 from rllib_pommer.launch.training import check_cluster_fits, check_gpus, cpus_per_env_runner
 from rllib_pommer.rl.config import build_config
-from rllib_pommer.rl.league import MATCHMAKING_MODULE, read_book
+from rllib_pommer.rl.league import MATCHMAKING_MODULE, members, read_book
 from rllib_pommer.rl.rl_module import vf_autocast
 
 # A value warm-up (pi frozen; a static teammate, so the fixed seats have three times the
 # learner's steps: RLlib's own count of minibatches for N learners would train each row about
-# three times), then a league with self-play, prioritized matchmaking and an exploiter, paid for
-# kills, with a dual clip. Suicide opponents lose every game: the gate fills a slot at once.
+# three times), then a league with self-play, prioritized matchmaking (its book kept, its floor
+# making the turns even) and an exploiter, paid for kills, with a dual clip. Suicide opponents
+# lose every game: a block with their turn passes the gate.
 LEARNERS_SMOKE = """
 name = "learners_smoke"
 description = "Two learners, test-sized."
@@ -38,8 +39,9 @@ dual_clip = 1.001
 [league]
 slots = 2
 gate_games = 4
-gate_win = 0.5
+gate_win = 0.25
 matchmaking = "prioritized"
+priority_floor = 1.0
 exploiter = true
 [defaults]
 reward = "raw_kills"
@@ -143,11 +145,16 @@ def test_vf_runs_under_bfloat16_on_the_cpu():
     assert vf_autocast("cuda") == (torch.cuda.is_available() and torch.cuda.is_bf16_supported())
 
 
+def _by_learner(results) -> list:
+    """RLlib's results of a call on every learner, in the learners' order."""
+    return sorted(results.result_or_errors, key=lambda result: result.actor_id or 0)
+
+
 def _states(algo) -> list[dict]:
     """Every learner's module states and optimizer moments, as numpy."""
-    return [result.get() for result in algo.learner_group.foreach_learner(
+    return [result.get() for result in _by_learner(algo.learner_group.foreach_learner(
         lambda learner: {"rl_module": learner.module.get_state(),
-                         "optimizer": learner._get_optimizer_state()})]
+                         "optimizer": learner._get_optimizer_state()}))]
 
 
 def _flat(state, prefix=()) -> dict:
@@ -211,11 +218,23 @@ def _minibatches(learner) -> tuple[int, bool]:
     return batches._num_total_minibatches, False
 
 
+def _fail_on_one(learner):
+    """An update that fails on learner 1 before its first all-reduce; learner 0's goes on to
+    it."""
+    from ray.rllib.core.learner.training_data import TrainingData
+    from ray.rllib.policy.sample_batch import MultiAgentBatch, SampleBatch
+
+    if learner._learner_index == 1:
+        learner.before_gradient_based_update = lambda **kwargs: 1 / 0
+    batch = MultiAgentBatch({LEARNER: SampleBatch({"x": np.zeros(300, np.float32)})}, 300)
+    learner.update(training_data=TrainingData(batch=batch), minibatch_size=64)
+
+
 def _on_both(algo, func) -> list:
     """`func` on both learners, within 5 minutes (a learner left alone in an all-reduce would
     wait for ever)."""
     results = algo.learner_group.foreach_learner(func, timeout_seconds=300)
-    values = [result.get() for result in results]
+    values = [result.get() for result in _by_learner(results)]
     assert len(values) == 2, "a learner did not answer: the learners' all-reduces parted"
     return values
 
@@ -273,9 +292,8 @@ def test_two_learners_keep_one_set_of_weights_and_one_league(ray_session, pi_wei
         assert all("pi_dual_clipped_rows" in r["learners"][LEARNER] for r in league_results)
         assert all("learner_kills" in r["env_runners"] for r in league_results)
         assert "matchmaking" in results[-1]
-        books = [r.get() for r in algo.learner_group.foreach_learner(
-            lambda learner: (read_book(learner, league),
-                             learner.module[MATCHMAKING_MODULE].get_state()))]
+        books = _on_both(algo, lambda learner: (read_book(learner, league),
+                                                learner.module[MATCHMAKING_MODULE].get_state()))
         assert books[0][0] == books[1][0] and books[0][0][0].filled
         assert _equal(books[0][1], books[1][1]) and books[0][1]["results"].sum() > 0
         runner = algo.env_runner.module["snapshot_0"].get_state()
@@ -283,6 +301,12 @@ def test_two_learners_keep_one_set_of_weights_and_one_league(ray_session, pi_wei
                    for k, v in runner.items())
         saved, book = states[0], books[0][0]
         two = algo.save_to_path(str(tmp_path / "two_learners"))
+
+        # A learner that fails takes the other down with it instead of leaving it waiting.
+        failed = _by_learner(algo.learner_group.foreach_learner(_fail_on_one,
+                                                                timeout_seconds=300))
+        assert [result.ok for result in failed] == [False, False]
+        assert "division by zero" in str(failed[1].get())
     finally:
         algo.stop()
 
@@ -295,7 +319,8 @@ def test_two_learners_keep_one_set_of_weights_and_one_league(ray_session, pi_wei
         assert read_book(algo.learner_group._learner, league) == book
         mapping = algo.env_runner_group.foreach_env_runner(
             lambda runner: runner.config.policy_mapping_fn.opponent, local_env_runner=False)
-        assert [opponent[-1] for opponent in mapping] == ["snapshot_0"]
+        filled = members(book)  # on the runner's mapping at once
+        assert filled and [opponent[-len(filled):] for opponent in mapping] == [filled]
         result = algo.train()
         assert result["training_iteration"] == len(results) + 1
         saved = _states(algo)[0]
@@ -309,8 +334,7 @@ def test_two_learners_keep_one_set_of_weights_and_one_league(ray_session, pi_wei
     try:
         restored = _states(algo)
         assert _equal(saved, restored[0]) and _equal(saved, restored[1])
-        books = [r.get() for r in algo.learner_group.foreach_learner(
-            lambda learner: read_book(learner, league))]
+        books = _on_both(algo, lambda learner: read_book(learner, league))
         assert books[0] == books[1] and books[0][0].filled
     finally:
         algo.stop()
@@ -339,3 +363,72 @@ def test_a_gpu_learner_holds_its_modules_on_the_gpu_and_its_checkpoint_moves_to_
         assert _equal(saved, _states(algo)[0], "rl_module")
     finally:
         algo.stop()
+
+
+TINY = """
+name = "learners_tiny"
+description = "Test-sized: one stage of 8 games."
+max_steps = 40
+[ppo]
+train_batch_size = 320
+num_epochs = 1
+num_envs_per_env_runner = 4
+checkpoint_every = 1
+[defaults]
+teammate = "suicide"
+[[stage]]
+name = "static"
+opponent = "static"
+episodes = 8
+"""
+
+
+def _train(*args, cwd):
+    import subprocess
+    import sys
+
+    return subprocess.run([sys.executable, "-m", "rllib_pommer.train", *args], cwd=cwd,
+                          capture_output=True, text=True, timeout=900)
+
+
+@pytest.mark.timeout(2400)
+def test_a_run_of_two_learners_packs_exports_and_resumes_with_none(tmp_path, pi_weights):
+    """`train --num-learners 2` end to end: Tune places the learners on our own 2-CPU Ray, the
+    trial's config says so, `--pack` and `--export` read its checkpoint as any other, and
+    `--resume` goes on from it with the learner in the algorithm's process and an env runner."""
+    import json
+
+    from rllib_pommer.runs.checkpoints import latest_checkpoint, load_checkpoint_net
+    from rllib_pommer.runs.history import legs, read_rows
+
+    curriculum, run = tmp_path / "tiny.toml", tmp_path / "run"
+    curriculum.write_text(TINY)
+    first = _train("--curriculum", str(curriculum), "--out", str(run), "--pi-weights",
+                   str(pi_weights), "--num-learners", "2", "--num-cpus-per-learner", "0.5",
+                   cwd=tmp_path)
+    assert first.returncode == 0 and "done: " in first.stdout, first.stderr[-3000:]
+    (trial,) = run.glob("PPO_*")
+    params = json.loads((trial / "params.json").read_text())
+    assert (params["num_learners"], params["num_cpus_per_learner"]) == (2, 0.5)
+    assert (params["minibatch_size"], params["_train_batch_size_per_learner"]) == (64, 160)
+
+    packed = _train("--out", str(run), "--pack", cwd=tmp_path)
+    assert packed.returncode == 0, packed.stderr[-3000:]
+    checkpoint = latest_checkpoint(run)
+    exported = _train("--out", str(run), "--export", str(tmp_path / "policies" / "two"),
+                      cwd=tmp_path)
+    assert exported.returncode == 0, exported.stderr[-3000:]
+    shipped = torch.load(tmp_path / "policies" / "two" / "pi.pt", weights_only=True)
+    trained = load_checkpoint_net(checkpoint).state_dict()
+    assert shipped.keys() == trained.keys()
+    assert all(torch.equal(shipped[k], trained[k]) for k in trained)
+
+    resumed = _train("--out", str(run), "--resume", "--num-env-runners", "1", cwd=tmp_path)
+    assert resumed.returncode == 0 and "done: " in resumed.stdout, resumed.stderr[-3000:]
+    leg = max(run.glob("PPO_*"), key=lambda path: len(legs(path)))
+    assert legs(leg) == [trial, leg]
+    params = json.loads((leg / "params.json").read_text())
+    assert (params["num_learners"], params["num_env_runners"]) == (0, 1)
+    assert params["minibatch_size"] == 128
+    iterations = [int(float(row["training_iteration"])) for row in read_rows(leg)]
+    assert iterations == list(range(1, len(iterations) + 1)) and len(iterations) > 1
