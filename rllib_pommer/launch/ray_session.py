@@ -56,13 +56,21 @@ def record(run_dir: Path, cluster: bool = False) -> None:
 
 
 def session_processes(session_dir: str) -> list[int]:
-    """The pids of processes (other than this one) with a file open in `session_dir`."""
+    """The pids of processes other than this one that belong to the session: a file open in
+    its folder (every Ray process logs there) or the folder on the command line (an agent that
+    has not opened its logs yet). Exited ones whose parent has not reaped them are left out."""
     prefix = session_dir.rstrip("/") + "/"
     found = []
     for entry in PROC.iterdir():
         if not entry.name.isdigit() or int(entry.name) == os.getpid():
             continue
         try:
+            if (entry / "stat").read_text().rsplit(")", 1)[1].split()[0] == "Z":
+                continue
+            command = (entry / "cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
+            if session_dir in command:
+                found.append(int(entry.name))
+                continue
             targets = [os.readlink(fd) for fd in (entry / "fd").iterdir()]
         except OSError:  # gone meanwhile, or not ours to inspect
             continue

@@ -31,7 +31,7 @@ import torch
 from ..curriculum.curriculum import load_curriculum
 from ..curriculum.names import LEARNER_THREADS_ENV
 from ..rl.config import build_config
-from .speed import learner_rows, random_pi_weights, sample_iteration
+from .speed import random_pi_weights, timed_updates
 
 LOGICAL_CPUS = 8
 CURRICULUM = "league2"  # the league recipe: a league of learned and scripted opponents
@@ -94,25 +94,12 @@ def _tree_rss_mib(root: int) -> float:
 
 
 def _phases(algo, updates: int) -> dict:
-    """Env steps/s of sampling alone and learner samples/s (learner rows times epochs) of the
-    update alone, over `updates` iterations' batches after one warm-up."""
-    config = algo.config
-    steps = sample_s = samples = update_s = 0.0
-    for update in range(updates + 1):
-        start = time.perf_counter()
-        episodes = sample_iteration(algo)
-        sampled = time.perf_counter()
-        algo.learner_group.update(episodes=episodes, num_epochs=config.num_epochs,
-                                  minibatch_size=config.minibatch_size,
-                                  shuffle_batch_per_epoch=True)
-        if update:
-            steps += sum(map(len, episodes))
-            sample_s += sampled - start
-            update_s += time.perf_counter() - sampled
-            samples += learner_rows(episodes) * config.num_epochs
-    return {"sampling_env_steps_per_s": round(steps / sample_s, 1),
-            "learner_samples_per_s": round(samples / update_s, 1),
-            "learner_samples_per_env_step": round(samples / steps, 3)}
+    """Env steps/s of sampling alone and learner samples/s of the update alone."""
+    timed = timed_updates(algo, updates)
+    return {"sampling_env_steps_per_s": round(timed["env_steps"] / timed["sampling_s"], 1),
+            "learner_samples_per_s": round(timed["learner_samples"] / timed["update_s"], 1),
+            "learner_samples_per_env_step": round(timed["learner_samples"]
+                                                  / timed["env_steps"], 3)}
 
 
 def measure(layout: Layout, weights: Path, curriculum: str, iterations: int,

@@ -131,20 +131,31 @@ def sample_iteration(algo) -> list:
         _uses_new_env_runners=True)
 
 
-def _learner_samples_per_s(algo, frozen: bool, updates: int) -> float:
+def timed_updates(algo, updates: int) -> dict:
+    """Sampling and the learner's update timed apart over `updates` iterations' batches after
+    one warm-up: env steps sampled and seconds, learner samples (rows times epochs) and
+    seconds."""
     config = algo.config
-    algo.learner_group.foreach_learner(lambda l: l.module[LEARNER].set_pi_frozen(frozen))
-    samples = seconds = 0.0
-    for update in range(updates + 1):  # the first update is a warm-up
-        episodes = sample_iteration(algo)
+    out = dict.fromkeys(("env_steps", "sampling_s", "learner_samples", "update_s"), 0.0)
+    for update in range(updates + 1):
         start = time.perf_counter()
+        episodes = sample_iteration(algo)
+        sampled = time.perf_counter()
         algo.learner_group.update(episodes=episodes, num_epochs=config.num_epochs,
                                   minibatch_size=config.minibatch_size,
                                   shuffle_batch_per_epoch=True)
         if update:
-            seconds += time.perf_counter() - start
-            samples += learner_rows(episodes) * config.num_epochs
-    return samples / seconds
+            out["env_steps"] += sum(map(len, episodes))
+            out["sampling_s"] += sampled - start
+            out["update_s"] += time.perf_counter() - sampled
+            out["learner_samples"] += learner_rows(episodes) * config.num_epochs
+    return out
+
+
+def _learner_samples_per_s(algo, frozen: bool, updates: int) -> float:
+    algo.learner_group.foreach_learner(lambda l: l.module[LEARNER].set_pi_frozen(frozen))
+    timed = timed_updates(algo, updates)
+    return timed["learner_samples"] / timed["update_s"]
 
 
 def _connector_seconds(algo, repeats: int) -> dict:

@@ -32,10 +32,11 @@ import signal
 import socket
 import sys
 import time
-from pathlib import Path
 
 from ray._private import ray_constants
 from ray.exceptions import RaySystemError
+
+from rllib_pommer.launch.ray_session import session_processes
 
 START_WAIT_S = 300.0  # for a node to come up
 STOP_WAIT_S = 60.0  # for its processes to exit
@@ -43,7 +44,6 @@ STOP_WAIT_S = 60.0  # for its processes to exit
 os.environ.setdefault("RAY_gcs_server_port_wait_time_s", str(int(START_WAIT_S)))
 AGENT_PORTS = ("metrics_agent_port", "dashboard_agent_listen_port", "runtime_env_agent_port",
                "metrics_export_port")
-PROC = Path("/proc")
 
 
 def say(reply) -> None:
@@ -89,30 +89,6 @@ def _raylet_told_its_agent_port(start_ray_process):
                 command = [*command, f"--dashboard_agent_listen_port={port.group(1)}"]
         return start_ray_process(command, process_type, *args, **kwargs)
     return start
-
-
-def session_processes(session_dir: str) -> list[int]:
-    """The pids of processes other than this one that belong to the session: a file open in
-    its folder (every Ray process logs there) or the folder on the command line (an agent that
-    has not opened its logs yet)."""
-    prefix = session_dir.rstrip("/") + "/"
-    found = []
-    for entry in PROC.iterdir():
-        if not entry.name.isdigit() or int(entry.name) == os.getpid():
-            continue
-        try:
-            if (entry / "stat").read_text().rsplit(")", 1)[1].split()[0] == "Z":
-                continue  # exited; only its parent's wait is missing
-            command = (entry / "cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
-            if session_dir in command:
-                found.append(int(entry.name))
-                continue
-            targets = [os.readlink(fd) for fd in (entry / "fd").iterdir()]
-        except OSError:  # gone meanwhile, or not ours to inspect
-            continue
-        if any(target.startswith(prefix) for target in targets):
-            found.append(int(entry.name))
-    return sorted(found)
 
 
 def _end_session(session_dir: str) -> list[int]:

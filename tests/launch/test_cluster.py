@@ -30,8 +30,6 @@ from rllib_pommer.launch.training import check_learner_fits_a_node
 from rllib_pommer.runs.checkpoints import checkpoint_complete, checkpoint_iteration
 from rllib_pommer.runs.history import legs
 
-from .ray_cluster import session_processes
-
 REPO = Path(__file__).resolve().parents[2]
 HELPER = Path(__file__).with_name("ray_cluster.py")
 # One logical CPU per node, so that the run's five actors (the algorithm's, two learners, two
@@ -201,7 +199,7 @@ def test_a_run_trains_on_five_nodes_then_resumes_on_a_ray_of_its_own(tmp_path, p
         session_dir = cluster.session_dir
         left = cluster.stop()
 
-    assert left == [] and session_processes(session_dir) == []
+    assert left == [] and ray_session.session_processes(session_dir) == []
     # Every actor the cluster ever had is the run's (the refused runs made none), each on a node
     # of its own: the learners updated, and the runners sampled, on nodes apart from each other
     # and from the algorithm's.
