@@ -10,10 +10,11 @@ read them with rllib_pommer.data.dataset.open_dataset). Same --seed, same datase
 With --expert search (or search_fast, or any policy file of kind search), four search agents
 at the file's effort play instead (docs/search.md), seated and seeded as in the arena, and each
 row's action is the one its agent played: the same rows and planes, so `imitate` trains on them
-unchanged. The search agent breaks ties and near-ties (values within 1) with a draw from its
-seeded stream; --label-draws does not apply. Search games are slow (docs/measurements.md), so
-their shards default to 16 games. The shards name their expert and its effort, and a directory
-holding another expert's shards is refused.
+unchanged. The search agent's only randomness is its draw between actions whose values lie
+within 1 of each other; with --label-draws K each row also counts the actions K further draws
+pick from the same values (no further search, so nearly free). Search games are slow
+(docs/measurements.md), so their shards default to 16 games. The shards name their expert and
+its effort, and a directory holding another expert's shards is refused.
 
 With --dagger POLICY, the learned policy plays instead (its team on seats {0, 2} and {1, 3} in
 turn, against the --vs opponents in turn) and only its decisions are recorded, each labelled with
@@ -50,7 +51,7 @@ def main(argv: list[str] | None = None) -> int:
                         help="who plays all four seats: simple, or a policy of kind search "
                              "(search, search_fast, a .toml file) (default: %(default)s)")
     parser.add_argument("--label-draws", type=int, default=0, metavar="K",
-                        help="also record SimpleAgent's action counts over K draws from the same "
+                        help="also record the expert's action counts over K draws from the same "
                              "memory per decision, the soft targets of imitation (0..255)")
     parser.add_argument("--dagger", metavar="POLICY",
                         help="DAgger data: this learned policy plays (greedy) and SimpleAgent "

@@ -21,7 +21,9 @@ stream.
 The effort (depth, horizon, recall) comes from the policy file (`Effort.from_spec`), never from
 a clock, so a seeded game replays exactly. `search_actions` decides for a batch of observation
 rows with their memory rows, which the arena's `SearchAgent` (one row) and RLlib's fixed module
-(`rl/search_module.py`, many) both call.
+(`rl/search_module.py`, many) both call; `search_decisions` also counts the actions further
+draws of the tie-break would pick from the same values (the soft labels of expert data,
+data/expert.py).
 """
 
 from __future__ import annotations
@@ -75,7 +77,7 @@ from .belief import (
     remember,
 )
 from .belief import new_memory as new_belief_memory
-from .rng import next_uniform, seed_states
+from .rng import next_u64, next_uniform, seed_states
 from .survival import _walk_steps, escape_cells, play_scenario
 
 STOP, BOMB = int(Action.STOP), int(Action.BOMB)
@@ -430,6 +432,13 @@ def decide(board, agents, bombs, flames, items, meta, radio, me, game_type, dept
     `root_values`, ties broken by a uniform draw below 1 added to each from stream `row`."""
     value = root_values(board, agents, bombs, flames, items, meta, radio, me, game_type, depth,
                         horizon, hunt)
+    return pick(value, rng, row)
+
+
+@njit(cache=True)
+def pick(value, rng, row):
+    """The best of the six action values, each with a uniform draw below 1 added from stream
+    `row` of `rng` (which advances): ties and near-ties (values within 1) go to the draw."""
     best = STOP
     best_value = -np.inf
     for action in range(NUM_ACTIONS):
@@ -437,6 +446,21 @@ def decide(board, agents, bombs, flames, items, meta, radio, me, game_type, dept
         if noisy > best_value:
             best, best_value = action, noisy
     return best
+
+
+DRAW_GAMMA = np.uint64(0xD1B54A32D192ED03)  # spreads a stream's label draws apart
+
+
+@njit(cache=True)
+def count_draws(value, state, draws, counts):
+    """Add to `counts` (6,) the actions `pick` chooses from `value` in `draws` draws of streams
+    of their own, seeded from a stream at `state` and the draw's index (splitmix64 of the state
+    offset by the draw), so the counts are reproducible and the stream itself is left alone."""
+    scratch = np.empty(1, np.uint64)
+    for draw in range(draws):
+        scratch[0] = state ^ (np.uint64(draw + 1) * DRAW_GAMMA)
+        scratch[0] = next_u64(scratch, 0)
+        counts[pick(value, scratch, 0)] += 1
 
 
 @njit(cache=True)
@@ -470,7 +494,8 @@ def hunt_targets(board, alive, me, game_type, step, memory, targets):
 
 @njit(cache=True)
 def _decide_rows(board, blast, life, direction, flame, position, ammo, strength, can_kick, alive,
-                 agent_id, game_type, step, active, memory, rng, depth, horizon, recall, belief):
+                 agent_id, game_type, step, active, memory, rng, depth, horizon, recall, belief,
+                 draws, counts):
     m_rows = board.shape[0]
     out = np.zeros(m_rows, np.int64)
     s_board, s_agents, s_bombs, s_flames, s_items, s_meta, s_radio = belief
@@ -489,8 +514,11 @@ def _decide_rows(board, blast, life, direction, flame, position, ammo, strength,
         n_targets = hunt_targets(board[m], alive[m], me, game_type[m], step[m], memory[m],
                                  targets)
         hunt = hunt_distances(s_board, targets, n_targets)
-        out[m] = decide(s_board, s_agents, s_bombs, s_flames, s_items, s_meta, s_radio, me,
-                        game_type[m], depth, horizon, hunt, rng, m)
+        value = root_values(s_board, s_agents, s_bombs, s_flames, s_items, s_meta, s_radio, me,
+                            game_type[m], depth, horizon, hunt)
+        if draws > 0:
+            count_draws(value, rng[m], draws, counts[m])
+        out[m] = pick(value, rng, m)
         memory[m, LAST_ACTION] = out[m]
     return out
 
@@ -507,8 +535,22 @@ def search_actions(obs: Observation, memory: np.ndarray, effort: Effort,
     """Actions (M,) for observation rows of leading shape (M,); row m of `memory` (M,
     belief.MEMORY_SIZE) belongs to the agent seeing row m and is updated in place. Rows where
     `active` is False are skipped (Stop, memory untouched)."""
+    return search_decisions(obs, memory, effort, active)[0]
+
+
+def search_decisions(obs: Observation, memory: np.ndarray, effort: Effort,
+                     active: np.ndarray | None = None,
+                     draws: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """`search_actions`'s actions (M,), and (M, 6) uint8 counts of the actions the agent picks
+    from the same values in `draws` further draws of its tie-break (`count_draws`: streams of
+    their own, so the actions and the memory are those of `search_actions`); all zero without
+    draws or where `active` is False. The counts estimate the agent's action distribution: its
+    only randomness is that draw."""
+    if not 0 <= draws < 256:
+        raise ValueError(f"draws must be in 0..255 (counts are stored as uint8), got {draws}")
     rows = obs.board.shape[0]
     active = np.ones(rows, np.bool_) if active is None else np.asarray(active, np.bool_)
+    counts = np.zeros((rows, NUM_ACTIONS), np.uint8)
     rng = np.ascontiguousarray(memory[:, RNG]).view(np.uint64)
     actions = _decide_rows(
         np.ascontiguousarray(obs.board, np.uint8),
@@ -524,9 +566,10 @@ def search_actions(obs: Observation, memory: np.ndarray, effort: Effort,
         np.ascontiguousarray(obs.agent_id, np.int64),
         np.ascontiguousarray(obs.game_type, np.int64),
         np.ascontiguousarray(obs.step_count, np.int64),
-        active, memory, rng, effort.depth, effort.horizon, effort.recall, empty_belief())
+        active, memory, rng, effort.depth, effort.horizon, effort.recall, empty_belief(),
+        draws, counts)
     memory[:, RNG] = rng.view(np.int64)
-    return actions
+    return actions, counts
 
 
 class SearchAgent:

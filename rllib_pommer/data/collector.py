@@ -85,10 +85,6 @@ def plan_shards(games: int, seed: int, shard_games: int, label_draws: int = 0,
         if dagger is not None:
             raise ValueError(f"expert {expert!r}: DAgger data are labelled by SimpleAgent "
                              "(leave out --expert)")
-        if label_draws:
-            raise ValueError(f"expert {expert!r}: --label-draws counts SimpleAgent's "
-                             "tie-breaks; a search expert's label is the action it plays "
-                             "(leave out --label-draws)")
         searcher = SearchExpert.resolve(expert)
         players = {"agents": "search", "policy": searcher.name, "effort": searcher.effort_text}
     if dagger is not None:
@@ -121,7 +117,8 @@ class ShardPlan(Sequence):
 def _play(meta: ShardMeta, actor_of: ActorOf | None) -> Samples:
     games = range(meta.first_game, meta.stop_game)
     if meta.agents == "search":
-        return play_search_games(meta.seed, games, parse_effort(meta.effort))
+        return play_search_games(meta.seed, games, parse_effort(meta.effort),
+                                 label_draws=meta.label_draws)
     if meta.agents != "dagger":
         return play_games(meta.seed, games, label_draws=meta.label_draws)
     if actor_of is None:

@@ -157,19 +157,23 @@ def parse_effort(text: str) -> search.Effort:
 
 
 def play_search_games(seed: int, games: range, effort: search.Effort,
-                      batch_games: int = BATCH_GAMES) -> Samples:
+                      batch_games: int = BATCH_GAMES, label_draws: int = 0) -> Samples:
     """Every decision of the living agents in games `games` (in play order) of four search
-    agents at `effort`: each row's action is the one its agent played. The agent breaks ties,
-    and near-ties, between actions with a draw from its seeded stream (docs/search.md §2); no
-    counts are recorded (`action_counts` stays zero)."""
+    agents at `effort`: each row's action is the one its agent played.
+
+    The agent breaks ties and near-ties (values within 1) with a draw from its seeded stream
+    (docs/search.md §2). With `label_draws` > 0, each decision also carries the counts of the
+    actions that many further draws pick from the same values (`search.search_decisions`): the
+    agent's action distribution, the soft target. The draws come from streams of their own, so
+    the games played are the same with or without them, and they cost no further search.
+    """
     slots = GameSlots(seed, games, batch_games, new_memory=_search_memory)
     (memory,) = slots.memory
     recorded: list[Samples] = []
     while slots.playing:
         active = slots.active()
         rows = slots.engine.obs.agent_rows()
-        actions = search.search_actions(rows, memory, effort, active)
-        counts = np.zeros((len(active), NUM_ACTIONS), np.uint8)
+        actions, counts = search.search_decisions(rows, memory, effort, active, label_draws)
         recorded.append(slots.samples(rows, actions, counts).take(np.flatnonzero(active)))
         slots.step(actions)
     return Samples.concatenate(recorded)

@@ -1,9 +1,10 @@
 """The on-disk form of expert samples: one Parquet row per (game, step, agent) decision.
 
 A row holds the agent's raw observation (the `Observation` fields, not the 19 expanded planes),
-the action it took, the keys that name it, and (schema 2) `action_counts`: how often SimpleAgent
-chose each of the 6 actions in the shard's `label_draws` independent draws from the same memory
-(all zero when the shard was collected without draws). The five 11x11 maps go into one
+the action it took, the keys that name it, and (schema 2) `action_counts`: how often the expert
+(SimpleAgent, or the search agent) chose each of the 6 actions in the shard's `label_draws`
+independent draws of its tie-breaks from the same memory (all zero when the shard was collected
+without draws). The five 11x11 maps go into one
 fixed-size binary column `maps` (board, bomb_blast_strength, bomb_life, bomb_moving_direction,
 flame_life, each row-major), `position` (2 bytes), `alive` (4 bytes) and `action_counts` (6
 bytes) into small fixed-size binary columns, and the scalars into the narrowest integer types.
@@ -67,7 +68,7 @@ class Samples(NamedTuple):
     action: np.ndarray  # (K,) int64
     game: np.ndarray  # (K,) index of the game in the dataset
     board_seed: np.ndarray  # (K,) the seed the game's board was generated from
-    action_counts: np.ndarray  # (K, 6) uint8 SimpleAgent's choices over the label draws
+    action_counts: np.ndarray  # (K, 6) uint8 the expert's choices over the label draws
 
     def take(self, index) -> Samples:
         return Samples(self.obs.select(index), self.action[index], self.game[index],
@@ -92,7 +93,7 @@ class ShardMeta:
     board_size: int
     game_type: str = "team"
     agents: str = "simple"  # "simple", "search" (four search agents) or "dagger"
-    label_draws: int = 0  # SimpleAgent draws behind each row's action_counts (0: none)
+    label_draws: int = 0  # the expert's draws behind each row's action_counts (0: none)
     # DAgger shards (agents = "dagger"): the clone that played, the sha256 of its weights and
     # its opponents (comma-separated); see data/dagger.py. Search shards (agents = "search"):
     # `policy` is the search policy's name.

@@ -11,7 +11,7 @@ import pytest
 
 from rllib_pommer.agents.registry import make_agent
 from rllib_pommer.collect import main
-from rllib_pommer.data.collector import SEARCH_SHARD_GAMES, Collection, plan_shards
+from rllib_pommer.data.collector import SEARCH_SHARD_GAMES, Collection, Dagger, plan_shards
 from rllib_pommer.data.dataset import open_dataset
 from rllib_pommer.data.expert import SearchExpert, play_search_games
 from rllib_pommer.data.schema import SHARD_KEY, encode, read_meta
@@ -22,14 +22,18 @@ from rllib_pommer.imitation.features import featurize
 
 from .conftest import read_all
 
-EXPERT, GAMES, SEED, SHARD = "search_fast", 4, 11, 2
+EXPERT, GAMES, SEED, SHARD, DRAWS = "search_fast", 4, 11, 2, 8
 EFFORT = "depth=1 horizon=10 recall=5"  # policies/search_fast.toml
+
+
+def _collection(out, games=GAMES, shard_games=SHARD, expert=EXPERT) -> Collection:
+    return Collection(out, games, SEED, shard_games, DRAWS, expert=expert)
 
 
 @pytest.fixture(scope="module")
 def search_dataset(tmp_path_factory):
     out = tmp_path_factory.mktemp("search")
-    Collection(out, GAMES, SEED, SHARD, expert=EXPERT).run(workers=1)
+    _collection(out).run(workers=1)
     return out
 
 
@@ -39,23 +43,22 @@ def _keys(table) -> np.ndarray:
 
 
 def test_the_metadata_names_the_expert_and_its_effort(search_dataset, tiny_dataset):
-    shard, meta = read_meta(search_dataset / "shard-000000.parquet")
+    _, meta = read_meta(search_dataset / "shard-000000.parquet")
     assert (meta.agents, meta.policy, meta.effort, meta.label_draws) == ("search", EXPERT,
-                                                                         EFFORT, 0)
+                                                                         EFFORT, DRAWS)
     assert meta.expert == f"{EXPERT} (search, {EFFORT})"
-    assert not np.frombuffer(shard.read().column("action_counts").combine_chunks().buffers()[1],
-                             np.uint8).any()
     simple = json.loads(read_meta(tiny_dataset / "shard-000000.parquet")[0]
                         .metadata.metadata[SHARD_KEY])
     assert "effort" not in simple and simple["agents"] == "simple"  # as before search shards
 
 
 def test_same_games_whatever_the_shards_and_the_batch(search_dataset, tmp_path):
-    Collection(tmp_path / "one", GAMES, SEED, GAMES, expert=EXPERT).run(workers=1)
+    _collection(tmp_path / "one", shard_games=GAMES).run(workers=1)
     assert read_all(tmp_path / "one").equals(read_all(search_dataset))
-    meta = plan_shards(GAMES, SEED, SHARD, expert=EXPERT)[1]
+    meta = plan_shards(GAMES, SEED, SHARD, DRAWS, expert=EXPERT)[1]
     effort = SearchExpert.resolve(EXPERT).effort
-    one_slot = play_search_games(SEED, range(SHARD, GAMES), effort, batch_games=1)
+    one_slot = play_search_games(SEED, range(SHARD, GAMES), effort, batch_games=1,
+                                 label_draws=DRAWS)
     shard, _ = read_meta(search_dataset / "shard-000001.parquet")
     assert encode(one_slot, meta).replace_schema_metadata(None).equals(
         shard.read().replace_schema_metadata(None))
@@ -87,7 +90,7 @@ def test_rows_are_the_search_agents_decisions(search_dataset, game):
         obs, _, _, _ = engine.step(actions)
         step += 1
     assert checked > 100 and not [k for k in row_of if k[0] == game]
-    assert not counts.any()
+    assert (counts.sum(1) == DRAWS).all()
     assert featurize(obs_rows.select(slice(0, 8))).shape[1:] == (19, 11, 11)  # imitate's planes
 
 
@@ -96,7 +99,7 @@ def test_a_resumed_collection_is_the_uninterrupted_one(search_dataset, tmp_path)
     shutil.copytree(search_dataset, out)
     (out / "shard-000001.parquet").unlink()
     (out / ".shard-000001.4242.tmp").write_bytes(b"half a shard")
-    collection = Collection(out, GAMES, SEED, SHARD, expert=EXPERT)
+    collection = _collection(out)
     assert collection.missing == [1]
     collection.run(workers=1)
     assert sorted(p.name for p in out.iterdir()) == ["shard-000000.parquet",
@@ -110,7 +113,7 @@ def test_a_resumed_collection_is_the_uninterrupted_one(search_dataset, tmp_path)
 ])
 def test_another_experts_shards_are_refused(search_dataset, expert, other):
     with pytest.raises(ValueError) as refused:
-        Collection(search_dataset, GAMES, SEED, SHARD, expert=expert)
+        _collection(search_dataset, expert=expert)
     message = str(refused.value)
     assert "\n" not in message and "shard-000000.parquet" in message
     assert f"collected by expert {other}" in message
@@ -127,15 +130,37 @@ def test_search_shards_are_refused_in_a_simple_dataset(tiny_dataset, capsys):
     assert "collected by expert simple;" in err[0] and f"is {EXPERT} (search," in err[0]
 
 
+def _no_actor(policy):
+    raise AssertionError("never asked for")
+
+
 @pytest.mark.parametrize("options, refusal", [
     (dict(expert="static"), "not a 'static' policy"),
     (dict(expert="search_action"), "without suffixes"),
     (dict(expert="no_such_policy"), "unknown policy"),
-    (dict(expert="search", label_draws=8), "label-draws"),
+    (dict(expert="search", label_draws=8, dagger=Dagger("clone", ("simple",), _no_actor)),
+     "DAgger data are labelled by SimpleAgent"),
 ])
-def test_bad_search_settings_are_refused(options, refusal, tmp_path):
+def test_bad_search_settings_are_refused(options, refusal):
     with pytest.raises(ValueError, match=refusal):
         plan_shards(GAMES, SEED, SHARD, **options)
+
+
+def test_label_draws_leave_the_games_alone_and_count_the_tie_breaks():
+    """With or without counts the same games are played. Each row's counts add up to the draws;
+    the played action is one more draw of the same tie-break, so it is nearly always among them,
+    and most decisions are unanimous (the draw decides only between values within 1)."""
+    effort = SearchExpert.resolve(EXPERT).effort
+    plain = play_search_games(SEED, range(2), effort)
+    soft = play_search_games(SEED, range(2), effort, label_draws=DRAWS)
+    assert np.array_equal(plain.action, soft.action) and not plain.action_counts.any()
+    assert np.array_equal(plain.obs.board, soft.obs.board)
+    assert (soft.action_counts.sum(1) == DRAWS).all()
+    played_share = soft.action_counts[np.arange(len(soft.action)), soft.action].mean() / DRAWS
+    undecided = (soft.action_counts.max(1) < DRAWS).mean()
+    assert 0.7 < played_share < 0.99 and 0.02 < undecided < 0.6, (played_share, undecided)
+    again = play_search_games(SEED, range(2), effort, label_draws=DRAWS)
+    assert np.array_equal(again.action_counts, soft.action_counts)
 
 
 def test_cli_collects_search_games_in_small_shards(tmp_path, capsys):
