@@ -9,6 +9,7 @@ env runners, with every module's weights and the league's book as they were."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -61,7 +62,8 @@ episodes = 100000
 self_play = true
 """
 
-TWO_LEARNERS = {"num_learners": 2, "num_cpus_per_learner": 0.5}  # 1 + 2 x 0.5: the tests' Ray
+TWO_LEARNERS = {"num_learners": 2, "num_cpus_per_learner": 0.5}
+REPO = Path(__file__).resolve().parents[2]  # 1 + 2 x 0.5: the tests' Ray
 
 
 @pytest.mark.parametrize("args, error", [
@@ -132,7 +134,7 @@ def test_a_run_asking_for_gpus_ray_lacks_is_refused(monkeypatch):
     check_gpus(RunSettings())  # asks for none
     with pytest.raises(ValueError, match=r"the run asks for 2 GPUs \(--num-learners 2 x "
                                          r"--num-gpus-per-learner 1\) and this machine's Ray"):
-        check_gpus(RunSettings(num_learners=2, num_gpus_per_learner=1))
+        check_gpus(RunSettings(num_learners=2, num_gpus_per_learner=1, num_cpus_per_learner=0))
     monkeypatch.setattr(ray, "available_resources", lambda: {"CPU": 3.0})
     with pytest.raises(ValueError, match=r"has 3 free CPUs; the run asks for 4 \(1 for the "
                                          r"algorithm's process, 2 for --num-learners 2, 1 for "
@@ -432,3 +434,22 @@ def test_a_run_of_two_learners_packs_exports_and_resumes_with_none(tmp_path, pi_
     assert params["minibatch_size"] == 128
     iterations = [int(float(row["training_iteration"])) for row in read_rows(leg)]
     assert iterations == list(range(1, len(iterations) + 1)) and len(iterations) > 1
+
+
+def test_the_gpu_benchmark_runs_its_steps_on_cpus(tmp_path):
+    """`benchmarks/gpu_learner.py --dry-run`: the league curriculum with the "GPU" learner on the
+    CPU, its checkpoint moved to a CPU run with every weight equal, both learners timed."""
+    import json
+    import subprocess
+    import sys
+
+    out = tmp_path / "gpu_learner.json"
+    done = subprocess.run([sys.executable, str(REPO / "benchmarks" / "gpu_learner.py"),
+                           "--dry-run", "--out", str(out)], cwd=tmp_path, capture_output=True,
+                          text=True, timeout=900)
+    assert done.returncode == 0, done.stderr[-3000:]
+    figures = json.loads(out.read_text())
+    assert figures["dry_run"] and figures["weights_equal_on_cpu"]
+    assert figures["arrays_compared"] > 20 and figures["learner_devices"] == ["cpu"]
+    assert figures["gpu_learner_samples_per_s"] > 0 and figures["cpu_learner_samples_per_s"] > 0
+    assert "all equal" in done.stdout
