@@ -98,12 +98,14 @@ def dual_clipped(advantages: torch.Tensor, log_ratio: torch.Tensor, bound: float
 class PommerPPOLearner(PPOTorchLearner):
     """RLlib's PPO torch learner with a fused Adam per module and a connector that batches the
     trained agents only, which refuses to train a learner module whose pi has no weights, skips
-    non-finite updates and can dual-clip (module docstring)."""
+    non-finite updates, can dual-clip, and as one of several learner actors averages its
+    gradients with theirs (module docstring)."""
     def build(self) -> None:
         # Ray gives the algorithm's process, where the local learner lives (and samples,
         # without remote env runners), one OpenMP thread per CPU it holds (one); `train
         # --torch-threads` says how many it may use. A learner actor uses the CPUs it holds.
-        torch.set_num_threads(max(1, int(self.config.num_cpus_per_learner))
+        cpus = self.config.num_cpus_per_learner  # RLlib's default is "auto": one
+        torch.set_num_threads(max(1, int(cpus) if isinstance(cpus, int | float) else 1)
                               if self.config.num_learners else
                               int(os.environ.get(LEARNER_THREADS_ENV, "1")))
         torch.set_flush_denormal(True)  # the planes are sparse (docs/measurements.md)
