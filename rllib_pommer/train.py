@@ -28,6 +28,7 @@ curriculum's (`curriculum/settings.PPOSettings`, overridable in its [ppo] table)
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
@@ -83,11 +84,15 @@ def main(argv: list[str] | None = None) -> int:
     # Imports after parsing, so --help is instant.
     import ray
 
+    from .launch.scale import layout_hint
     from .launch.training import RayStartError, start_run, train
 
     try:  # everything that can be checked is checked before Ray starts
         settings = settings_from(RunSettings, args)
         curriculum, out, start = start_run(settings, lambda line: print(line, file=sys.stderr))
+        hint = layout_hint(settings, os.cpu_count() or 1)
+        if hint:
+            print(hint, file=sys.stderr)
     except ValueError as exc:
         parser.error(str(exc))
     except RayStartError as exc:  # not the user's input: one line and exit 1, no traceback

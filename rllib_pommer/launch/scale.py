@@ -174,3 +174,20 @@ def scale_table(result: dict) -> str:
         lines.append(f"| {row['cores']} | {row['env_runners']} | {row['learners']} | "
                      f"{row['iteration_s']} | {row['env_steps_per_s']} | {row['update_share']} |")
     return "\n".join(lines)
+
+
+# The fastest layout of a run alone on 2 cores (`bench scale`, docs/scaling.md).
+ALONE = Layout("2 env runners, local learner, 2 threads", env_runners=2, threads=2)
+
+
+def layout_hint(settings, cores: int) -> str | None:
+    """The line `train` prints for a run that takes the default layout (sampling and learning on
+    one core, for one run per core) on its own Ray instance where `cores` >= 2: the layout a run
+    alone on the machine should take instead. None otherwise."""
+    default = (settings.num_env_runners, settings.num_learners, settings.torch_threads) == (0, 0, 1)
+    if settings.address is not None or cores < 2 or not default:
+        return None
+    return (f"this run samples and learns on one core, the layout for one run per core; a run "
+            f"alone on this {cores}-core machine goes faster with remote env runners and more "
+            f"learner threads (on 2 cores: {ALONE.command}; docs/scaling.md, and `python -m "
+            f"rllib_pommer.bench scale` measures every layout)")

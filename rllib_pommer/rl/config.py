@@ -20,7 +20,7 @@ override:
 Layout (`train --num-env-runners N --torch-threads T`, not PPO's arithmetic): by default the
 algorithm's process samples and learns on one thread, so two runs share a 2-core machine, one per
 core, the most work per hour when there are several runs to do; a run alone on 2 cores goes
-faster with 2 remote env runners and 2 learner threads (`bench layout` compares them). A
+faster with 2 remote env runners and 2 learner threads (`bench scale` compares them). A
 resumed run is built afresh from its data (launch/training.py), so it takes the layout its
 command asks for.
 
@@ -151,11 +151,11 @@ def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None
             lambda_=ppo.lambda_, num_epochs=ppo.num_epochs,
             train_batch_size_per_learner=math.ceil(ppo.train_batch_size / shards),
             vf_loss_coeff=ppo.vf_loss_coeff, use_kl_loss=ppo.use_kl_loss,
-            grad_clip=ppo.grad_clip,
-            learner_config_dict={DUAL_CLIP_KEY: ppo.dual_clip})  # inf: PPO's own loss
+            grad_clip=ppo.grad_clip)
         .learners(learner_class=PommerPPOLearner, num_learners=num_learners,
                   num_gpus_per_learner=num_gpus_per_learner,
-                  num_cpus_per_learner=num_cpus_per_learner)
+                  num_cpus_per_learner=num_cpus_per_learner,
+                  learner_config_dict={DUAL_CLIP_KEY: ppo.dual_clip})  # inf: PPO's own loss
         .callbacks([partial(LeagueCallback, curriculum_ref(curriculum)),  # the gate first
                     partial(StageCallback, curriculum_ref(curriculum),
                             str(restore_from) if restoring else None),

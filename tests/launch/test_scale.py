@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import pytest
 
-from rllib_pommer.launch.scale import Layout, project, scale_speeds, scale_table
+from rllib_pommer.curriculum.settings import RunSettings
+from rllib_pommer.launch.scale import ALONE, Layout, layout_hint, project, scale_speeds, scale_table
 
 
 def test_each_layout_is_measured_and_compared_with_the_first(ray_session):
@@ -33,3 +34,11 @@ def test_projections_divide_both_phases_over_the_cores():
     eight = project(one_core, 4000, 8)
     assert eight["iteration_s"] == pytest.approx(30 / 7, abs=0.01)
     assert eight["update_share"] == pytest.approx(2 / 3, abs=1e-3)
+
+
+def test_train_names_the_faster_layout_only_to_a_default_run_with_cores_to_spare():
+    hint = layout_hint(RunSettings(), cores=2)
+    assert hint and ALONE.command in hint and "--num-env-runners 2 --torch-threads 2" in hint
+    assert layout_hint(RunSettings(), cores=1) is None
+    assert layout_hint(RunSettings(num_env_runners=2, torch_threads=2), cores=2) is None
+    assert layout_hint(RunSettings(address="10.0.0.1:6379"), cores=8) is None
