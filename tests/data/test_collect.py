@@ -15,24 +15,24 @@ import pytest
 from rllib_pommer.agents.simple import SimpleAgent
 from rllib_pommer.collect import main
 from rllib_pommer.data.collector import Collection, plan_shards
-from rllib_pommer.data.dataset import open_dataset
 from rllib_pommer.data.expert import play_games
 from rllib_pommer.data.schema import SHARD_GLOB, encode, read_meta
-from rllib_pommer.game.constants import TEAM_PRESET
-from rllib_pommer.game.engine import Game
 from rllib_pommer.game.seeding import game_seeds
 
-from .conftest import TINY_GAMES, TINY_LABEL_DRAWS, TINY_SEED, TINY_SHARD_GAMES, read_all
+from .conftest import (
+    TINY_GAMES,
+    TINY_LABEL_DRAWS,
+    TINY_SEED,
+    TINY_SHARD_GAMES,
+    read_all,
+    replay_against_rows,
+    row_keys,
+)
 
 
 def _tiny(out, games: int, seed: int) -> Collection:
     """A collection in the tiny dataset's shard size and label draws."""
     return Collection(out, games, seed, TINY_SHARD_GAMES, TINY_LABEL_DRAWS)
-
-
-def _keys(table) -> np.ndarray:
-    return np.stack([table.column(k).to_numpy().astype(np.int64)
-                     for k in ("game", "step_count", "agent_id")], 1)
 
 
 def test_same_seed_same_dataset_whatever_the_workers(tiny_dataset, tmp_path):
@@ -54,7 +54,7 @@ def test_refilled_batch_slots_play_the_same_games(tiny_dataset):
 
 def test_one_row_per_decision_of_each_living_agent(tiny_dataset):
     table = read_all(tiny_dataset)
-    keys = _keys(table)
+    keys = row_keys(table)
     assert len(np.unique(keys, axis=0)) == len(keys)
     assert set(keys[:, 0]) == set(range(TINY_GAMES))
     for game, agent in {(g, a) for g, _, a in keys}:
@@ -68,28 +68,13 @@ def test_one_row_per_decision_of_each_living_agent(tiny_dataset):
 def test_samples_read_back_equal_a_replay_of_the_game(tiny_dataset, game):
     """Replay with the single-game API and one SimpleAgent object per seat, seeded as the
     collector seeds game `game`: every observation and action must come back from the reader."""
-    obs_rows, action_rows, _ = next(open_dataset(tiny_dataset).iter_batches(10**6, shuffle=False))
     table = read_all(tiny_dataset)
-    keys = _keys(table)
-    row_of = {tuple(k): i for i, k in enumerate(keys)}
-    board_seed, rngs = game_seeds(TINY_SEED, game)
+    keys = row_keys(table)
+    board_seed, _ = game_seeds(TINY_SEED, game)
     assert set(table.column("board_seed").to_numpy()[keys[:, 0] == game]) == {board_seed}
-    engine, agents = Game(TEAM_PRESET), [SimpleAgent() for _ in range(4)]
-    for seat, agent in enumerate(agents):
-        agent.reset(seat, int(TEAM_PRESET.game_type), rngs[seat])
-    obs, step, checked = engine.reset(board_seed), 0, 0
-    while not engine.done:
-        actions = [0] * 4
-        for seat in np.flatnonzero(obs.alive[0]):
-            actions[seat] = agents[seat].act(obs.select(seat))
-            row = row_of.pop((game, step, seat))
-            for name, expected in obs.select(seat)._asdict().items():
-                assert np.array_equal(getattr(obs_rows, name)[row], expected), (step, seat, name)
-            assert action_rows[row] == actions[seat]
-            checked += 1
-        obs, _, _, _ = engine.step(actions)
-        step += 1
-    assert checked > 100 and not [k for k in row_of if k[0] == game]
+    checked, unmatched = replay_against_rows(tiny_dataset, TINY_SEED, game,
+                                             [SimpleAgent() for _ in range(4)])
+    assert checked > 100 and not unmatched
 
 
 def test_label_draws_leave_the_games_alone_and_sample_the_recorded_policy(tiny_dataset):
@@ -138,7 +123,7 @@ def test_killed_run_resumes_to_the_uninterrupted_dataset(tmp_path):
     Collection(tmp_path / "whole", games, TINY_SEED, shard_games).run(workers=1)
     resumed = read_all(out)
     assert resumed.equals(read_all(tmp_path / "whole"))
-    assert len(np.unique(_keys(resumed), axis=0)) == resumed.num_rows
+    assert len(np.unique(row_keys(resumed), axis=0)) == resumed.num_rows
     assert sorted(p.name for p in out.iterdir()) == [p.name for p in sorted(out.glob(SHARD_GLOB))]
 
 

@@ -15,12 +15,9 @@ from rllib_pommer.data.collector import SEARCH_SHARD_GAMES, Collection, Dagger, 
 from rllib_pommer.data.dataset import open_dataset
 from rllib_pommer.data.expert import SearchExpert, play_search_games
 from rllib_pommer.data.schema import SHARD_KEY, encode, read_meta
-from rllib_pommer.game.constants import TEAM_PRESET
-from rllib_pommer.game.engine import Game
-from rllib_pommer.game.seeding import game_seeds
 from rllib_pommer.imitation.features import featurize
 
-from .conftest import read_all
+from .conftest import read_all, replay_against_rows
 
 EXPERT, GAMES, SEED, SHARD, DRAWS = "search_fast", 4, 11, 2, 8
 EFFORT = "depth=1 horizon=10 recall=5"  # policies/search_fast.toml
@@ -35,11 +32,6 @@ def search_dataset(tmp_path_factory):
     out = tmp_path_factory.mktemp("search")
     _collection(out).run(workers=1)
     return out
-
-
-def _keys(table) -> np.ndarray:
-    return np.stack([table.column(k).to_numpy().astype(np.int64)
-                     for k in ("game", "step_count", "agent_id")], 1)
 
 
 def test_the_metadata_names_the_expert_and_its_effort(search_dataset, tiny_dataset):
@@ -69,27 +61,10 @@ def test_rows_are_the_search_agents_decisions(search_dataset, game):
     """Replay game `game` with the single-game API and one catalogue search agent per seat,
     each reset from its seat's stream as the arena resets it: every recorded observation and
     action comes back, and every decision of every living agent is there."""
-    obs_rows, action_rows, counts = next(
-        open_dataset(search_dataset).iter_batches(10**6, shuffle=False))
-    keys = _keys(read_all(search_dataset))
-    row_of = {tuple(k): i for i, k in enumerate(keys)}
-    board_seed, rngs = game_seeds(SEED, game)
-    engine, agents = Game(TEAM_PRESET), [make_agent(EXPERT) for _ in range(4)]
-    for seat, agent in enumerate(agents):
-        agent.reset(seat, int(TEAM_PRESET.game_type), rngs[seat])
-    obs, step, checked = engine.reset(board_seed), 0, 0
-    while not engine.done:
-        actions = [0] * 4
-        for seat in np.flatnonzero(obs.alive[0]):
-            actions[seat] = agents[seat].act(obs.select(seat))
-            row = row_of.pop((game, step, seat))
-            for name, expected in obs.select(seat)._asdict().items():
-                assert np.array_equal(getattr(obs_rows, name)[row], expected), (step, seat, name)
-            assert action_rows[row] == actions[seat], (step, seat)
-            checked += 1
-        obs, _, _, _ = engine.step(actions)
-        step += 1
-    assert checked > 100 and not [k for k in row_of if k[0] == game]
+    checked, unmatched = replay_against_rows(search_dataset, SEED, game,
+                                             [make_agent(EXPERT) for _ in range(4)])
+    assert checked > 100 and not unmatched
+    obs_rows, _, counts = next(open_dataset(search_dataset).iter_batches(10**6, shuffle=False))
     assert (counts.sum(1) == DRAWS).all()
     assert featurize(obs_rows.select(slice(0, 8))).shape[1:] == (19, 11, 11)  # imitate's planes
 
