@@ -426,16 +426,6 @@ def _contested(agents, me, action):
 
 
 @njit(cache=True)
-def decide(board, agents, bombs, flames, items, meta, radio, me, game_type, depth, horizon, hunt,
-           rng, row):
-    """The action of the searching agent `me` in the believed state: the best of
-    `root_values`, ties broken by a uniform draw below 1 added to each from stream `row`."""
-    value = root_values(board, agents, bombs, flames, items, meta, radio, me, game_type, depth,
-                        horizon, hunt)
-    return pick(value, rng, row)
-
-
-@njit(cache=True)
 def pick(value, rng, row):
     """The best of the six action values, each with a uniform draw below 1 added from stream
     `row` of `rng` (which advances): ties and near-ties (values within 1) go to the draw."""

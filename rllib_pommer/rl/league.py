@@ -266,24 +266,27 @@ def module_states(algorithm, module_ids) -> dict:
 
 def share_modules(algorithm, module_ids) -> None:
     """Modules `module_ids` of the first learner copied onto every other learner (module
-    docstring), through RLlib's `LearnerGroup.set_state`; nothing to do with one learner. The
-    state carries no weights sequence number, which would make a learner at the same number
-    skip it."""
-    group = algorithm.learner_group
-    if group.is_local or len(group) < 2 or not module_ids:
+    docstring), through RLlib's `LearnerGroup.set_state`, and onto every env runner
+    (`push_modules`), from one read of their states. The state carries no weights sequence
+    number, which would make a learner at the same number skip it."""
+    if not module_ids:
         return
-    group.set_state({COMPONENT_LEARNER: {
-        COMPONENT_RL_MODULE: module_states(algorithm, module_ids)}})
+    states = module_states(algorithm, module_ids)
+    group = algorithm.learner_group
+    if not group.is_local and len(group) > 1:
+        group.set_state({COMPONENT_LEARNER: {COMPONENT_RL_MODULE: states}})
+    push_modules(algorithm, module_ids, states)
 
 
-def push_modules(algorithm, slots) -> None:
-    """The learner's copies of modules `slots` (snapshots, a restarted exploiter) onto every env
-    runner. Not RLlib's weight sync, which an env runner skips when the learner's weights
-    sequence number has not moved since the last sync (a slot filled after an update has the
-    same number), and which ran before the callback changed them."""
+def push_modules(algorithm, slots, states: dict | None = None) -> None:
+    """The learner's copies of modules `slots` (snapshots, a restarted exploiter), or their
+    `states` where the caller has read them, onto every env runner. Not RLlib's weight sync,
+    which an env runner skips when the learner's weights sequence number has not moved since
+    the last sync (a slot filled after an update has the same number), and which ran before the
+    callback changed them."""
     if not slots:
         return
-    states = module_states(algorithm, slots)
+    states = states or module_states(algorithm, slots)
     for slot in slots:
         algorithm.env_runner_group.foreach_env_runner(
             lambda runner, slot=slot, state=states[slot]: runner.module[slot].set_state(state),
@@ -388,7 +391,6 @@ class LeagueCallback(RLlibCallback):
             self._new_member(algorithm, joined)
             if joined:  # restarted from the learner
                 share_modules(algorithm, [EXPLOITER])
-                push_modules(algorithm, [EXPLOITER])
             block_wins, block_games = on_learner(
                 algorithm, lambda learner: module_of(
                     learner, MATCHMAKING_MODULE).exploiter.tolist())
@@ -409,7 +411,6 @@ class LeagueCallback(RLlibCallback):
             on_every_learner(algorithm,
                              lambda learner: module_of(learner, MATCHMAKING_MODULE).forget(slot))
         share_modules(algorithm, [slot])
-        push_modules(algorithm, [slot])
 
     def on_train_result(self, *, algorithm, result, **kwargs) -> None:
         if self.curriculum.league is None:

@@ -259,4 +259,3 @@ class PommerPPOLearner(PPOTorchLearner):
         for module_id, module in self.module.items():
             if self.should_module_be_updated(module_id):
                 module.unwrapped().require_pi()
-
