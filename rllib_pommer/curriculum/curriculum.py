@@ -6,6 +6,7 @@ the stages in order::
 
     name = "paper"
     game = "team"                                # optional; "radio": TeamRadio
+    memory = false                               # optional; true: the memory planes too
     pi_weights = "../policies/imitation/pi.pt"   # optional; relative to this file
     [ppo]
     train_batch_size = 4000
@@ -69,8 +70,8 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-TOP_KEYS = ("name", "description", "game", "pi_weights", "vf_weights", "max_steps", "ppo",
-            "league", "defaults", "stage")
+TOP_KEYS = ("name", "description", "game", "pi_weights", "vf_weights", "max_steps", "memory",
+            "ppo", "league", "defaults", "stage")
 
 
 @dataclass(frozen=True)
@@ -109,6 +110,7 @@ class Curriculum:
     description: str = ""
     vf_weights: Path | None = None  # a value network's state_dict; None: vf starts at random
     game: str = "team"  # `TEAM_GAMES`: "team", or "radio" (TeamRadio: the learner also speaks)
+    memory: bool = False  # the learner reads the memory planes too (imitation/recall.py)
 
     @property
     def total_episodes(self) -> int:
@@ -292,6 +294,8 @@ def load_curriculum(name_or_path: str | Path) -> Curriculum:
         raise ValueError(f"{where}: game {data['game']!r} is not one of {list(TEAM_GAMES)}")
     if "max_steps" in data:
         _check_type(where, "max_steps", data["max_steps"], int, positive=True)
+    if "memory" in data:
+        _check_type(where, "memory", data["memory"], bool)
     ppo = data.get("ppo", {})
     _check_options(f"{where} [ppo]", ppo, PPOSettings.options())
     league = data.get("league")
@@ -321,6 +325,7 @@ def load_curriculum(name_or_path: str | Path) -> Curriculum:
         vf_weights=(path.parent / data["vf_weights"]).resolve() if data.get("vf_weights")
         else None,
         game=data.get("game", "team"),
+        memory=data.get("memory", False),
     )
 
 

@@ -26,6 +26,11 @@ and the action filter rebuild the exact arrays the compiled agents take), so any
 any seat; "planes" is the 19 planes alone, as a Box; "planes_last" the same planes channels-last
 (11, 11, 19), the layout RLlib's default CNN encoder reads.
 
+With `memory` every seat keeps a memory row of its own observations (`agents/belief.py`),
+fresh at each reset, and its planes are 22: the 19, then the three memory planes of
+`imitation/recall.py` (what it saw under today's fog), for a policy with memory; a 19-plane
+network reads the first 19 (`network.PommerNet.first_planes`).
+
 `game` picks the variant (`game.constants.TEAM_GAMES`): "team", the default, or "radio",
 TeamRadio (docs/rules.md §10), the same game in which every agent also sends its teammate two
 words 0..7 each step. There an action is `MultiDiscrete([6, 8, 8])`, [move, word, word] (a plain
@@ -43,6 +48,7 @@ from dataclasses import replace
 import gymnasium as gym
 import numpy as np
 
+from ..agents.belief import new_memory
 from ..game.constants import (
     BOARD_SIZE,
     NUM_ACTIONS,
@@ -58,38 +64,52 @@ from ..game.observation import Observation
 from ..game.raw_codec import RAW_SIZE, pack_raw
 from ..game.rewards import check_reward_mode, clock_reward, final_reward, kill_reward
 from ..imitation.features import NUM_PLANES, featurize, message_features
+from ..imitation.recall import MEMORY_PLANES, recall_planes
 from ..viz.frames import state_frame
 from ..viz.render import draw_frame
 
 RENDER_MODES = ["rgb_array"]  # of the PettingZoo and Gymnasium envs: `MultiAgentTeam.draw`
 
-PLANES_SPACE = gym.spaces.Box(0.0, 1.0, (NUM_PLANES, BOARD_SIZE, BOARD_SIZE), np.float32)
-OBSERVATION_SPACE = gym.spaces.Dict({
-    "planes": PLANES_SPACE,
-    "raw": gym.spaces.Box(0, np.iinfo(np.int16).max, (RAW_SIZE,), np.int16),
-})
+def planes_space(planes: int = NUM_PLANES) -> gym.spaces.Box:
+    """One agent's `planes` float planes (19, or 22 with memory) as a Box."""
+    return gym.spaces.Box(0.0, 1.0, (planes, BOARD_SIZE, BOARD_SIZE), np.float32)
+
+
+def dict_space(planes: int = NUM_PLANES) -> gym.spaces.Dict:
+    """The "dict" form's space: the planes and the raw observation."""
+    return gym.spaces.Dict({
+        "planes": planes_space(planes),
+        "raw": gym.spaces.Box(0, np.iinfo(np.int16).max, (RAW_SIZE,), np.int16),
+    })
+
+
+PLANES_SPACE = planes_space()
+OBSERVATION_SPACE = dict_space()
 ACTION_SPACE = gym.spaces.Discrete(NUM_ACTIONS)
 # TeamRadio: [move, word, word], and the teammate's words heard, one-hot.
 RADIO_ACTION_SPACE = gym.spaces.MultiDiscrete([NUM_ACTIONS] + [RADIO_VOCAB_SIZE] * RADIO_NUM_WORDS)
 MESSAGE_SPACE = gym.spaces.Box(0.0, 1.0, (RADIO_NUM_WORDS, RADIO_VOCAB_SIZE), np.float32)
 
 
-def _dict_rows(obs: Observation) -> list[dict[str, np.ndarray]]:
-    planes, raw = featurize(obs), pack_raw(obs)
+def _dict_rows(planes: np.ndarray, obs: Observation) -> list[dict[str, np.ndarray]]:
+    raw = pack_raw(obs)
     return [{"planes": planes[a], "raw": raw[a]} for a in range(NUM_AGENTS)]
 
 
-# Observation form -> (one agent's space, the four agents' rows from the engine's (4,) rows).
-OBSERVATIONS: dict[str, tuple[gym.Space, Callable[[Observation], list]]] = {
-    "dict": (OBSERVATION_SPACE, _dict_rows),
-    "planes": (PLANES_SPACE, lambda obs: list(featurize(obs))),
-    "planes_last": (gym.spaces.Box(0.0, 1.0, (BOARD_SIZE, BOARD_SIZE, NUM_PLANES), np.float32),
-                    lambda obs: list(np.moveaxis(featurize(obs), -3, -1))),
+# Observation form -> (one agent's space for a number of planes, the four agents' rows from
+# their (4, planes, 11, 11) planes and the engine's (4,) observation rows).
+OBSERVATIONS: dict[str, tuple[Callable[[int], gym.Space],
+                              Callable[[np.ndarray, Observation], list]]] = {
+    "dict": (dict_space, _dict_rows),
+    "planes": (planes_space, lambda planes, obs: list(planes)),
+    "planes_last": (lambda n: gym.spaces.Box(0.0, 1.0, (BOARD_SIZE, BOARD_SIZE, n), np.float32),
+                    lambda planes, obs: list(np.moveaxis(planes, -3, -1))),
 }
 
 
 # The config keys `MultiAgentTeam` reads: the PettingZoo env refuses others (a typo would pass).
-CONFIG_KEYS = ("seed", "max_steps", "reward", "observation", "action_filter", "jitter", "game")
+CONFIG_KEYS = ("seed", "max_steps", "reward", "observation", "action_filter", "jitter", "game",
+               "memory")
 
 
 def radio_space(space: gym.Space) -> gym.spaces.Dict:
@@ -142,10 +162,16 @@ def check_render_mode(render_mode: str | None) -> str | None:
 
 
 def agent_observations(obs: Observation, form: str = "dict",
-                       message: np.ndarray | None = None) -> dict[int, object]:
+                       message: np.ndarray | None = None,
+                       memory: np.ndarray | None = None) -> dict[int, object]:
     """The four agents' observations in `form` from the engine's (4,) observation rows; with
-    the (4, 2) words each agent hears (`Game.message`), TeamRadio's (module docstring)."""
-    rows = OBSERVATIONS[form][1](obs)
+    the (4, 2) words each agent hears (`Game.message`), TeamRadio's; with the seats' memory
+    rows (4, belief.MEMORY_SIZE), which fold these observations in, the memory planes after the
+    19 (module docstring)."""
+    planes = featurize(obs)
+    if memory is not None:
+        planes = np.concatenate([planes, recall_planes(obs, memory)], axis=1)
+    rows = OBSERVATIONS[form][1](planes, obs)
     if message is None:
         return dict(enumerate(rows))
     heard = message_features(message)
@@ -158,7 +184,8 @@ class MultiAgentTeam:
 
     config: seed, max_steps (default the preset's), reward ("shaped"|"raw"), observation
     ("dict"|"planes"|"planes_last"), action_filter and jitter (per-episode activation
-    probabilities of the learner's filters), game ("team"|"radio"). Other keys are ignored:
+    probabilities of the learner's filters), game ("team"|"radio"), memory (bool: the memory
+    planes after the 19, module docstring). Other keys are ignored:
     subclasses read their own (the bench's zero-cost env reads episode_length).
     """
 
@@ -173,7 +200,9 @@ class MultiAgentTeam:
         if self.observation_form not in OBSERVATIONS:
             raise ValueError(f"env config: observation {self.observation_form!r} is not one of "
                              f"{list(OBSERVATIONS)}")
-        space = OBSERVATIONS[self.observation_form][0]
+        self.memory = new_memory(NUM_AGENTS) if config.get("memory", False) else None
+        space = OBSERVATIONS[self.observation_form][0](
+            NUM_PLANES if self.memory is None else MEMORY_PLANES)
         self.possible_agents = list(range(NUM_AGENTS))
         self.agents = []
         self.observation_spaces = dict.fromkeys(self.possible_agents,
@@ -195,6 +224,8 @@ class MultiAgentTeam:
         if seed is not None:
             self._rng = np.random.default_rng(seed)
         self.last_observation = self.game.reset(int(self._rng.integers(2**31)))
+        if self.memory is not None:
+            self.memory[:] = 0  # a fresh memory for each seat's new game
         self._filters = {name: bool(self._rng.random() < p)
                          for name, p in self.filter_probabilities.items()}
         self.agents = list(self.possible_agents)
@@ -203,7 +234,7 @@ class MultiAgentTeam:
 
     def _observations(self, obs: Observation) -> dict[int, object]:
         return agent_observations(obs, self.observation_form,
-                                  self.game.message if self.radio else None)
+                                  self.game.message if self.radio else None, self.memory)
 
     def step(self, action_dict):
         """One step of every agent: `action_dict` maps seats to actions; a seat left out (a

@@ -21,6 +21,9 @@ of agents from their observations and parks each one on its agent, whose next `a
 The arena uses this to batch inference across the games a worker plays in lockstep; wrappers
 (action filter, jitter correction) still call `act` as usual.
 
+A network with memory (22 input planes: `recall.py`) is played by agents that each keep a memory
+row over their game, folded in at each decision.
+
 A TeamRadio network (`RadioNet`) is played by a `RadioAgent`, which takes part in the channel of
 `agents/speaker.radio_act`: it hears its teammate's words (the net's message input; silence
 until then, and always in Team) and speaks the net's two words. A Team network stays silent.
@@ -39,6 +42,7 @@ import numpy as np
 import torch
 
 from ..agents.base import innermost
+from ..agents.belief import new_memory
 from ..agents.registry import (
     ACTING_KEYS,
     Acting,
@@ -53,16 +57,19 @@ from ..agents.speaker import SILENCE
 from ..game.constants import NUM_ACTIONS, RADIO_NUM_WORDS, RADIO_VOCAB_SIZE, has_radio
 from ..game.observation import Observation
 from ..util.errors import first_sentence
-from .features import featurize, message_features
-from .network import PommerNet, RadioNet, build_net, is_radio_state, load_weights
+from .features import NUM_PLANES, featurize, message_features
+from .network import PommerNet, RadioNet, build_net, is_radio_state, load_weights, planes_of
+from .recall import recall_planes
 
 
 def load_policy_net(path: str | Path, num_outputs: int = NUM_ACTIONS,
-                    radio: bool | None = None) -> PommerNet:
+                    radio: bool | None = None, planes: int | None = None) -> PommerNet:
     """A policy network (dropout off, eval mode) from a state_dict file, with a clear error;
     `num_outputs=1` reads a PPO value network. It is a `RadioNet` for a TeamRadio state_dict,
     a `PommerNet` for a Team one; `radio=True` asks for a `RadioNet` from either (a Team net's
-    move logits exactly: `network.load_weights`), `radio=False` for a `PommerNet`."""
+    move logits exactly: `network.load_weights`), `radio=False` for a `PommerNet`. It reads the
+    planes its weights read (19, or 22 with memory), or `planes` (a 19-plane file widened:
+    `network.widened`)."""
     path = Path(path)
     if path.is_dir():
         raise ValueError(f"{path}: a folder, not a weights file")
@@ -75,10 +82,11 @@ def load_policy_net(path: str | Path, num_outputs: int = NUM_ACTIONS,
     except Exception as exc:  # torch raises several types for corrupt or foreign files
         raise ValueError(f"{path}: not a readable weights file, a state_dict of tensors "
                          f"({first_sentence(exc)})") from None
-    net = build_net(num_outputs, is_radio_state(state) if radio is None else radio)
     try:
+        net = build_net(num_outputs, is_radio_state(state) if radio is None else radio,
+                        planes_of(state) if planes is None else planes)
         load_weights(net, state)
-    except (RuntimeError, TypeError, AttributeError) as exc:
+    except (RuntimeError, TypeError, AttributeError, ValueError, IndexError) as exc:
         raise ValueError(f"{path}: weights do not fit {type(net).__name__} ({exc})") from None
     return net.eval()
 
@@ -94,26 +102,40 @@ class LearnedPolicy:
         self.temperature = how.temperature
         self.source = source
         self.radio = isinstance(net, RadioNet)
+        self.remembers = net.planes > NUM_PLANES  # it reads the memory planes (recall.py)
 
     @torch.no_grad()
-    def logits(self, obs: Observation, messages: np.ndarray | None = None) -> torch.Tensor:
+    def logits(self, obs: Observation, messages: np.ndarray | None = None,
+               memory: np.ndarray | None = None) -> torch.Tensor:
         """The net's logits for observations with leading shape (B,): (B, 6), or a `RadioNet`'s
-        (B, 6 + 16) hearing `messages` (B, 2) (default: silence, what it hears in Team)."""
-        planes = torch.from_numpy(featurize(obs))
+        (B, 6 + 16) hearing `messages` (B, 2) (default: silence, what it hears in Team). A net
+        with memory also reads the agents' memory rows (B, belief.MEMORY_SIZE), which fold these
+        observations in (`recall.recall_planes`): without them it is refused, since one
+        observation cannot say what the fog hides."""
+        planes = featurize(obs)
+        if self.remembers:
+            if memory is None:
+                raise ValueError(f"the policy of {self.source} has memory (it reads "
+                                 f"{self.net.planes} planes): it needs its agents' memory rows, "
+                                 f"as its agents keep them over a game")
+            planes = np.concatenate([planes, recall_planes(obs, memory)], axis=1)
+        planes = torch.from_numpy(planes)
         if not self.radio:
             return self.net(planes)
         if messages is None:
             messages = np.zeros((len(planes), RADIO_NUM_WORDS), np.int64)
         return self.net(planes, torch.from_numpy(message_features(messages)))
 
-    def probabilities(self, obs: Observation, messages: np.ndarray | None = None) -> np.ndarray:
+    def probabilities(self, obs: Observation, messages: np.ndarray | None = None,
+                      memory: np.ndarray | None = None) -> np.ndarray:
         """Move probabilities (B, 6) at the policy's temperature, the distribution its moves are
         drawn from, for observations with leading shape (B,) (`logits`)."""
-        return _softmax(self.tempered_logits(obs, messages)[:, :NUM_ACTIONS])
+        return _softmax(self.tempered_logits(obs, messages, memory)[:, :NUM_ACTIONS])
 
-    def tempered_logits(self, obs: Observation, messages: np.ndarray | None = None) -> torch.Tensor:
+    def tempered_logits(self, obs: Observation, messages: np.ndarray | None = None,
+                        memory: np.ndarray | None = None) -> torch.Tensor:
         """`logits` at the policy's temperature (`temper`): what moves and words are drawn from."""
-        return self.temper(self.logits(obs, messages))
+        return self.temper(self.logits(obs, messages, memory))
 
     def temper(self, logits: torch.Tensor) -> torch.Tensor:
         """The net's logits (..., 6), or a radio net's (..., 6 + 16), as logits of the same
@@ -146,7 +168,11 @@ class LearnedPolicy:
         those that speak (`LearnedAgent.speaking`), drawn after the move from its own stream."""
         if messages is None:
             messages = np.array([agent.heard for agent in agents], np.int64)
-        logits = self.tempered_logits(obs, messages)
+        memory = np.stack([agent.memory for agent in agents]) if self.remembers else None
+        logits = self.tempered_logits(obs, messages, memory)
+        if memory is not None:
+            for agent, row in zip(agents, memory, strict=True):
+                agent.memory = row
         moves = self.choose(_softmax(logits[:, :NUM_ACTIONS]), [a.rng for a in agents])
         said = [SILENCE] * len(agents)
         talkers = [i for i, agent in enumerate(agents) if agent.speaking]
@@ -177,11 +203,13 @@ class LearnedAgent:
         self.pending: tuple[int, tuple[int, ...]] | None = None  # (move, words) decided
         self.heard: tuple[int, ...] = SILENCE
         self.said: tuple[int, ...] = SILENCE
+        self.memory = new_memory(1)[0]  # what a policy with memory saw this game (recall.py)
 
     def reset(self, agent_id: int, game_type: int, rng: np.random.Generator) -> None:
         self.rng = rng
         self.pending = None
         self.heard = self.said = SILENCE
+        self.memory = new_memory(1)[0]
 
     def act(self, obs: Observation) -> int:
         if self.pending is None:

@@ -37,11 +37,14 @@ WORD_LOGITS = RADIO_NUM_WORDS * RADIO_VOCAB_SIZE  # the two word heads, and the 
 
 
 class PommerNet(nn.Module):
-    """The paper's CNN (module docstring): 19 planes in, `num_outputs` logits or one value out."""
-    def __init__(self, num_outputs: int = NUM_ACTIONS, dropout: float = 0.0):
+    """The paper's CNN (module docstring): 19 planes in (22 with memory, `planes`),
+    `num_outputs` logits or one value out."""
+    def __init__(self, num_outputs: int = NUM_ACTIONS, dropout: float = 0.0,
+                 planes: int = NUM_PLANES):
         super().__init__()
+        self.planes = planes
         layers: list[nn.Module] = []
-        in_channels = NUM_PLANES
+        in_channels = planes
         for out_channels in CHANNELS:
             layers += [
                 nn.Conv2d(in_channels, out_channels, kernel_size=3, padding=1),
@@ -60,7 +63,19 @@ class PommerNet(nn.Module):
 
     def forward(self, planes: torch.Tensor) -> torch.Tensor:
         """(B, 19, 11, 11) float planes -> (B, num_outputs)."""
-        return self.head(self.convs(planes))
+        return self.head(self.convs(self.first_planes(planes)))
+
+    def first_planes(self, planes: torch.Tensor) -> torch.Tensor:
+        """The planes this net reads, the first `self.planes` of its input: a 19-plane net plays
+        in an env that also draws the memory planes (`recall.py`), which follow the 19."""
+        if planes.shape[1] == self.planes:
+            return planes
+        if planes.shape[1] < self.planes:
+            raise ValueError(f"this network reads {self.planes} input planes (with memory: "
+                             f"imitation/recall.py) but was given {planes.shape[1]}; a policy "
+                             f"with memory plays only where the planes include it (a "
+                             f"curriculum's `memory = true`)")
+        return planes[:, :self.planes]
 
 
 class RadioNet(PommerNet):
@@ -69,8 +84,9 @@ class RadioNet(PommerNet):
     without `words`: the value net)."""
     RADIO_KEYS = ("hear.weight", "speak.weight", "speak.bias")
 
-    def __init__(self, num_outputs: int = NUM_ACTIONS, words: bool = True, dropout: float = 0.0):
-        super().__init__(num_outputs, dropout)
+    def __init__(self, num_outputs: int = NUM_ACTIONS, words: bool = True, dropout: float = 0.0,
+                 planes: int = NUM_PLANES):
+        super().__init__(num_outputs, dropout, planes)
         self.hear = nn.Linear(WORD_LOGITS, HIDDEN, bias=False)
         nn.init.zeros_(self.hear.weight)
         self.speak = nn.Linear(HIDDEN, WORD_LOGITS) if words else None
@@ -81,7 +97,8 @@ class RadioNet(PommerNet):
     def forward(self, planes: torch.Tensor, message: torch.Tensor) -> torch.Tensor:
         """(B, 19, 11, 11) float planes and (B, 2, 8) one-hot words -> (B, num_outputs [+ 16])."""
         flatten, hidden, relu, out = self.head
-        features = relu(hidden(flatten(self.convs(planes))) + self.hear(message.flatten(1)))
+        features = relu(hidden(flatten(self.convs(self.first_planes(planes))))
+                        + self.hear(message.flatten(1)))
         if self.speak is None:
             return out(features)
         return torch.cat([out(features), self.speak(features)], dim=-1)
@@ -90,8 +107,8 @@ class RadioNet(PommerNet):
         """Load a Team `PommerNet`'s state_dict (its keys and shapes exactly, else torch's
         error); hearing and speaking keep their weights (zero when new, module docstring)."""
         own = self.state_dict()
-        self.load_state_dict({**state, **{key: own[key] for key in self.RADIO_KEYS
-                                          if key in own}})
+        self.load_state_dict({**widened(state, self.planes),
+                              **{key: own[key] for key in self.RADIO_KEYS if key in own}})
 
 
 def is_radio_state(state: dict) -> bool:
@@ -99,18 +116,42 @@ def is_radio_state(state: dict) -> bool:
     return "hear.weight" in state
 
 
-def build_net(num_outputs: int = NUM_ACTIONS, radio: bool = False) -> PommerNet:
+FIRST_CONV = "convs.0.weight"
+
+
+def planes_of(state: dict) -> int:
+    """How many input planes a state_dict's network reads: 19, or 22 with memory."""
+    return int(state[FIRST_CONV].shape[1]) if FIRST_CONV in state else NUM_PLANES
+
+
+def widened(state: dict, planes: int) -> dict:
+    """`state` for a net reading `planes` inputs: a net reading fewer gets zero weights on the
+    planes it did not read, so the wider net computes exactly what it did (the memory planes of
+    recall.py start unheard, as a RadioNet's words do); a net reading more is refused."""
+    have = planes_of(state)
+    if have == planes or FIRST_CONV not in state:
+        return state
+    if have > planes:
+        raise ValueError(f"weights read {have} input planes, more than this network's {planes}: "
+                         f"a policy with memory (imitation/recall.py) cannot play without it")
+    weight = state[FIRST_CONV]
+    pad = weight.new_zeros((weight.shape[0], planes - have, *weight.shape[2:]))
+    return {**state, FIRST_CONV: torch.cat([weight, pad], dim=1)}
+
+
+def build_net(num_outputs: int = NUM_ACTIONS, radio: bool = False,
+              planes: int = NUM_PLANES) -> PommerNet:
     """A policy (`num_outputs` 6) or value (1) network of the Team game, or with `radio` of
-    TeamRadio, whose policy speaks (`RadioNet`); dropout off."""
-    return RadioNet(num_outputs, words=num_outputs == NUM_ACTIONS) if radio \
-        else PommerNet(num_outputs)
+    TeamRadio, whose policy speaks (`RadioNet`), reading `planes` inputs; dropout off."""
+    return RadioNet(num_outputs, words=num_outputs == NUM_ACTIONS, planes=planes) if radio \
+        else PommerNet(num_outputs, planes=planes)
 
 
 def load_weights(net: PommerNet, state: dict) -> None:
     """`state` into `net`: a `RadioNet` takes a radio state_dict as is and a Team one through
-    `load_team_state`, a `PommerNet` a Team one; anything else is torch's error naming the
-    keys or shapes that do not fit."""
+    `load_team_state`, a `PommerNet` a Team one; weights of a net reading fewer planes are
+    `widened`; anything else is torch's error naming the keys or shapes that do not fit."""
     if isinstance(net, RadioNet) and not is_radio_state(state):
         net.load_team_state(state)
     else:
-        net.load_state_dict(state)
+        net.load_state_dict(widened(state, net.planes))

@@ -121,6 +121,8 @@ def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None
                   "action_filter": first.action_filter, "jitter": first.jitter}
     if radio:  # only then, as vf_weights (the learner module reads it from the spaces)
         env_config["game"] = "radio"
+    if curriculum.memory:  # only then: the planes are 22 (imitation/recall.py)
+        env_config["memory"] = True
     modules = {LEARNER: RLModuleSpec(module_class=PommerPPOModule, model_config=model_config)}
     trained = [LEARNER]
     if curriculum.league and curriculum.league.exploiter:  # the same start (league.py)

@@ -91,7 +91,8 @@ class SnapshotModule(TorchRLModule):
     docstring). It samples from pi's logits, as the learner does in training."""
 
     def setup(self):
-        self.pi = PommerNet(6, dropout=0.0).to(memory_format=torch.channels_last)
+        planes = self.observation_space["planes"].shape[0]  # the learner's: 19, or 22 with memory
+        self.pi = PommerNet(6, planes=planes).to(memory_format=torch.channels_last)
         self.pi.requires_grad_(False)
         self.register_buffer("born", torch.tensor(-1, dtype=torch.int64))
         self.register_buffer("tally", torch.zeros(2, dtype=torch.int64))

@@ -25,6 +25,10 @@ by its whole ratio. Float32 removes the rounding (its results differ across batc
 inside the clip), and `learner.py`'s dual clip bounds such rows. The measurements
 (`benchmarks/logit_precision.py`, the paper campaign's collapse): docs/measurements.md.
 
+With memory (a curriculum's `memory = true`: the env's planes are 22, `imitation/recall.py`) both
+nets read 22 planes, and 19-plane weights files start them with the memory planes unheard
+(`network.widened`), so the run starts as the policy it continues plays.
+
 A curriculum may also name `vf_weights`, a value network's state_dict, for a run that continues
 another's (its pi and vf exported from a checkpoint) without a value warm-up; like pi's file it
 is read only where the module is trained, and a restore overwrites it.
@@ -66,20 +70,22 @@ class PommerPPOModule(TorchRLModule, ValueFunctionAPI):
     separate value CNN under bfloat16 autocast, both channels-last (module docstring)."""
     def setup(self):
         self.radio = isinstance(self.action_space, gym.spaces.MultiDiscrete)
-        self.pi = build_net(6, self.radio).to(memory_format=torch.channels_last)
-        self.vf = build_net(1, self.radio).to(memory_format=torch.channels_last)
+        planes = self.observation_space["planes"].shape[0]  # 19, or 22 with memory
+        self.pi = build_net(6, self.radio, planes).to(memory_format=torch.channels_last)
+        self.vf = build_net(1, self.radio, planes).to(memory_format=torch.channels_last)
         if self.radio:  # [move, word, word]: a categorical each (module docstring)
             self.action_dist_cls = TorchMultiCategorical.get_partial_dist_cls(
                 input_lens=[int(n) for n in self.action_space.nvec])
         self.pi_source: str | None = None  # where pi's weights came from (module docstring)
         weights = self.model_config.get("pi_weights")
         if weights and not self.inference_only and Path(weights).is_file():
-            self.pi.load_state_dict(load_policy_net(weights, radio=self.radio).state_dict())
+            self.pi.load_state_dict(load_policy_net(weights, radio=self.radio,
+                                                    planes=planes).state_dict())
             self.pi_source = f"imitation weights {weights}"
         vf_weights = self.model_config.get("vf_weights")  # a run that continues another's
         if vf_weights and not self.inference_only and Path(vf_weights).is_file():
-            self.vf.load_state_dict(load_policy_net(vf_weights, num_outputs=1,
-                                                    radio=self.radio).state_dict())
+            self.vf.load_state_dict(load_policy_net(vf_weights, num_outputs=1, radio=self.radio,
+                                                    planes=planes).state_dict())
 
     def set_state(self, state) -> None:
         super().set_state(state)

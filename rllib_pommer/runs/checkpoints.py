@@ -30,7 +30,7 @@ import torch
 
 from ..game.constants import NUM_ACTIONS
 from ..imitation.learned import register_learned_kind
-from ..imitation.network import PommerNet, build_net, is_radio_state
+from ..imitation.network import PommerNet, build_net, is_radio_state, planes_of
 
 MODULES_DIR = Path("learner_group/learner/rl_module")
 MODULE_STATE = MODULES_DIR / "learner" / "module_state.pkl"
@@ -119,7 +119,7 @@ def load_checkpoint_net(path: str | Path, part: str = "pi", module: str = "learn
     state = read_module_state(state_file)
     weights = {str(key).removeprefix(f"{part}."): torch.as_tensor(value)
                for key, value in state.items() if str(key).startswith(f"{part}.")}
-    net = build_net(NET_OUTPUTS[part], is_radio_state(weights))
+    net = build_net(NET_OUTPUTS[part], is_radio_state(weights), planes_of(weights))
     try:
         net.load_state_dict(weights)
     except (RuntimeError, TypeError) as exc:

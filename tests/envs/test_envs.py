@@ -195,3 +195,23 @@ def test_a_refused_action_moves_nothing():
     trace = [env.step(a)[0] for a in (1, 2, 3)]
     assert _same(trace, [same.step(a)[0] for a in (1, 2, 3)])
     assert env.step(np.int64(2))[0].shape == env.observation_space.shape  # numpy ints are actions
+
+
+def test_with_memory_every_seat_reads_22_planes_from_a_fresh_memory_each_game():
+    env = MultiAgentTeam({"memory": True, "seed": 7})
+    assert env.observation_spaces[0]["planes"].shape == (22, 11, 11)
+    games = []
+    for _ in range(2):
+        obs, _ = env.reset(seed=7)
+        trace = [np.stack([obs[a]["planes"] for a in range(4)])]
+        assert all(np.array_equal(obs[a]["planes"][:19], featurize(env.last_observation)[a])
+                   for a in range(4))
+        for _ in range(40):
+            obs, *_ = env.step({a: 1 + a % 4 for a in env.agents})
+            trace.append(np.stack([obs[a]["planes"] for a in obs]))
+        games.append(trace)
+    # the second game of the same seed remembers nothing of the first
+    assert all(np.array_equal(x, y) for x, y in zip(*games, strict=True))
+    assert any(t[:, 19:].any() for t in games[0])
+    parallel = parallel_env(memory=True)
+    assert parallel.observation_space("player_0").shape == (22, 11, 11)
