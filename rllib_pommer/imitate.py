@@ -12,7 +12,9 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
+from .data.schema import read_meta
 from .imitation.bc import (
     WEIGHTS_FILE,
     BCConfig,
@@ -34,6 +36,20 @@ _HELP = {
 }
 
 
+def experts(data: list[Path]) -> str:
+    """Who played each dataset folder, as the clone's description names it: SimpleAgent, a
+    search policy, or SimpleAgent labelling a DAgger clone's states (its first shard says)."""
+    names = []
+    for folder in data:
+        shards = sorted(Path(folder).glob("shard-*.parquet"))
+        meta = read_meta(shards[0])[1] if shards else None
+        who = ("SimpleAgent" if meta is None or meta.agents == "simple" else
+               f"the search agent {meta.policy}" if meta.agents == "search" else
+               f"SimpleAgent on {meta.policy}'s states")
+        names.append(f"{who} ({Path(folder).name})")
+    return ", ".join(names)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m rllib_pommer.imitate", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -49,8 +65,7 @@ def main(argv: list[str] | None = None) -> int:
         metrics = train(cfg)
     except ValueError as exc:
         return report_error(exc)
-    names = ", ".join(d.name for d in cfg.data)
-    policy = write_policy_file(args.out, f"Behaviour cloning of SimpleAgent ({names})")
+    policy = write_policy_file(args.out, f"Behaviour cloning of {experts(cfg.data)}")
     print(f"validation accuracy {metrics['validation_accuracy']:.4f}, "
           f"loss {metrics['validation_loss']:.4f}; weights {args.out / WEIGHTS_FILE}, "
           f"policy file {policy}")

@@ -159,3 +159,10 @@ def test_imitate_trains_on_search_data_unchanged(search_dataset, tmp_path):
     metrics = train(cfg)
     assert metrics["train_samples"] > 0 and metrics["validation_samples"] > 0
     assert metrics["validation_loss"] < np.log(6) - 0.1
+
+
+def test_a_clone_names_the_expert_it_copies(search_dataset, tiny_dataset, tmp_path):
+    from rllib_pommer.imitate import experts
+
+    assert experts([tiny_dataset, search_dataset]) == (
+        f"SimpleAgent ({tiny_dataset.name}), the search agent {EXPERT} ({search_dataset.name})")
