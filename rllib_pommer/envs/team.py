@@ -63,8 +63,8 @@ from ..game.engine import RADIO_ACTION_SIZE, Game
 from ..game.observation import Observation
 from ..game.raw_codec import RAW_SIZE, pack_raw
 from ..game.rewards import check_reward_mode, clock_reward, final_reward, kill_reward
-from ..imitation.features import NUM_PLANES, featurize, message_features
-from ..imitation.recall import MEMORY_PLANES, recall_planes
+from ..imitation.features import NUM_PLANES, message_features
+from ..imitation.recall import MEMORY_PLANES, input_planes
 from ..viz.frames import state_frame
 from ..viz.render import draw_frame
 
@@ -168,10 +168,7 @@ def agent_observations(obs: Observation, form: str = "dict",
     the (4, 2) words each agent hears (`Game.message`), TeamRadio's; with the seats' memory
     rows (4, belief.MEMORY_SIZE), which fold these observations in, the memory planes after the
     19 (module docstring)."""
-    planes = featurize(obs)
-    if memory is not None:
-        planes = np.concatenate([planes, recall_planes(obs, memory)], axis=1)
-    rows = OBSERVATIONS[form][1](planes, obs)
+    rows = OBSERVATIONS[form][1](input_planes(obs, memory), obs)
     if message is None:
         return dict(enumerate(rows))
     heard = message_features(message)

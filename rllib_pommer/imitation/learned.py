@@ -57,9 +57,9 @@ from ..agents.speaker import SILENCE
 from ..game.constants import NUM_ACTIONS, RADIO_NUM_WORDS, RADIO_VOCAB_SIZE, has_radio
 from ..game.observation import Observation
 from ..util.errors import first_sentence
-from .features import NUM_PLANES, featurize, message_features
+from .features import NUM_PLANES, message_features
 from .network import PommerNet, RadioNet, build_net, is_radio_state, load_weights, planes_of
-from .recall import recall_planes
+from .recall import input_planes
 
 
 def load_policy_net(path: str | Path, num_outputs: int = NUM_ACTIONS,
@@ -112,14 +112,11 @@ class LearnedPolicy:
         with memory also reads the agents' memory rows (B, belief.MEMORY_SIZE), which fold these
         observations in (`recall.recall_planes`): without them it is refused, since one
         observation cannot say what the fog hides."""
-        planes = featurize(obs)
-        if self.remembers:
-            if memory is None:
-                raise ValueError(f"the policy of {self.source} has memory (it reads "
-                                 f"{self.net.planes} planes): it needs its agents' memory rows, "
-                                 f"as its agents keep them over a game")
-            planes = np.concatenate([planes, recall_planes(obs, memory)], axis=1)
-        planes = torch.from_numpy(planes)
+        if self.remembers and memory is None:
+            raise ValueError(f"the policy of {self.source} has memory (it reads "
+                             f"{self.net.planes} planes): it needs its agents' memory rows, as "
+                             f"its agents keep them over a game")
+        planes = torch.from_numpy(input_planes(obs, memory if self.remembers else None))
         if not self.radio:
             return self.net(planes)
         if messages is None:

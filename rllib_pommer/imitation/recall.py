@@ -48,7 +48,7 @@ from ..agents.belief import (
 )
 from ..game.constants import Item
 from ..game.observation import Observation
-from .features import DESIRABILITY, IDENTITY_CODES, NUM_PLANES, SCALE
+from .features import DESIRABILITY, IDENTITY_CODES, NUM_PLANES, SCALE, featurize
 
 RECALL_PLANES = 3
 MEMORY_PLANES = NUM_PLANES + RECALL_PLANES  # what a network with memory reads
@@ -111,3 +111,12 @@ def recall_planes(obs: Observation, memory: np.ndarray) -> np.ndarray:
                  np.ascontiguousarray(obs.alive), obs.agent_id.astype(np.int64),
                  np.ascontiguousarray(enemies), obs.step_count.astype(np.int64), memory, out)
     return out
+
+
+def input_planes(obs: Observation, memory: np.ndarray | None = None) -> np.ndarray:
+    """The planes a network reads for observations (B,): the 19 (`features.featurize`), and with
+    the agents' memory rows (folded in, `recall_planes`) the three memory planes after them."""
+    planes = featurize(obs)
+    if memory is None:
+        return planes
+    return np.concatenate([planes, recall_planes(obs, memory)], axis=1)
