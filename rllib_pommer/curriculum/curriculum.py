@@ -298,6 +298,8 @@ def load_curriculum(name_or_path: str | Path) -> Curriculum:
         _check_type(where, "memory", data["memory"], bool)
     ppo = data.get("ppo", {})
     _check_options(f"{where} [ppo]", ppo, PPOSettings.options())
+    if ppo.get("teacher"):  # kickstarting (rl/teacher.py): a policy the arena plays
+        _check_policy(f"{where} [ppo] teacher", ppo["teacher"])
     league = data.get("league")
     if league is not None:
         _check_options(f"{where} [league]", league, LeagueSettings.options())

@@ -66,6 +66,10 @@ class PPOSettings(TableSettings):
     # The dual clip's bound on the ratio of rows with a negative advantage (rl/learner.py);
     # inf: none, PPO as the paper ran it.
     dual_clip: float = _option(math.inf, low=1)
+    # Kickstarting (rl/teacher.py): a policy whose moves on the learner's steps pull pi, with
+    # this weight on their cross-entropy; "": none.
+    teacher: str = _option("")
+    teacher_weight: float = _option(0.5, low=0)
     # Fixed: the paper's (entropy, clip, minibatch) and ours (no KL penalty, gradient clip).
     entropy_coeff: float = 0.0
     clip_param: float = 0.01

@@ -69,6 +69,7 @@ from .learner import DUAL_CLIP_KEY, PommerPPOLearner
 from .outcomes import OutcomeMetrics
 from .rl_module import PommerPPOModule
 from .stages import StageCallback
+from .teacher import TEACHER_WEIGHT_KEY
 
 # what each of the learner's weights files is, and where it comes from, for check_weights' error
 WEIGHTS_HINTS = {
@@ -139,7 +140,7 @@ def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None
             num_env_runners=num_env_runners,
             num_cpus_per_env_runner=cpus_per_env_runner,
             num_envs_per_env_runner=ppo.num_envs_per_env_runner,
-            module_to_env_connector=learner_filters,
+            module_to_env_connector=partial(learner_filters, teacher=ppo.teacher),
             rollout_fragment_length="auto",
             episodes_to_numpy=False)
         .multi_agent(
@@ -157,7 +158,9 @@ def build_config(curriculum: Curriculum, *, pi_weights: str | Path | None = None
         .learners(learner_class=PommerPPOLearner, num_learners=num_learners,
                   num_gpus_per_learner=num_gpus_per_learner,
                   num_cpus_per_learner=num_cpus_per_learner,
-                  learner_config_dict={DUAL_CLIP_KEY: ppo.dual_clip})  # inf: PPO's own loss
+                  learner_config_dict={DUAL_CLIP_KEY: ppo.dual_clip,  # inf: PPO's own loss
+                                       TEACHER_WEIGHT_KEY: ppo.teacher_weight if ppo.teacher
+                                       else 0.0})
         .callbacks([partial(LeagueCallback, curriculum_ref(curriculum)),  # the gate first
                     partial(StageCallback, curriculum_ref(curriculum),
                             str(restore_from) if restoring else None),

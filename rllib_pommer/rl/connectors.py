@@ -36,6 +36,7 @@ from ..agents.registry import FILTER_SWITCHES, resolve_policy, switched_on, with
 from ..curriculum.names import LEARNER
 from ..game.constants import TEAM_PRESET
 from ..game.raw_codec import unpack_raw
+from .teacher import TeacherLabels
 
 FILTERS_KEY = "learner_filters"
 FIXED_FILTERS_KEY = "fixed_filters"
@@ -144,7 +145,7 @@ class LearnerFilters(ConnectorV2):
         return batch
 
 
-def learner_filters(env=None, spaces=None, device=None) -> list[ConnectorV2]:
-    """The module-to-env pieces RLlib puts before its own (`module_to_env_connector`): the
-    filters."""
-    return [LearnerFilters()]
+def learner_filters(env=None, spaces=None, device=None, *, teacher: str = "") -> list[ConnectorV2]:
+    """Our module-to-env pieces (`module_to_env_connector`; RLlib's own unbatch before them and
+    listify after): the filters, and with a `teacher` policy its moves (teacher.py)."""
+    return [LearnerFilters()] + ([TeacherLabels(teacher=teacher)] if teacher else [])

@@ -83,6 +83,7 @@ from ray.rllib.policy.sample_batch import MultiAgentBatch
 
 from ..curriculum.names import LEARNER, LEARNER_THREADS_ENV
 from ..game.constants import NUM_ACTIONS
+from .teacher import TEACHER_COLUMN, TEACHER_WEIGHT_KEY, teacher_loss
 from .trained_agents import TrainedAgentsOnly
 
 DUAL_CLIP_KEY = "dual_clip"  # in the config's learner_config_dict
@@ -225,8 +226,19 @@ class PommerPPOLearner(PPOTorchLearner):
                 self.metrics.log_value((module_id, "pi_dual_clipped_rows"), int(clipped.sum()),
                                        reduce="sum")
                 batch = {**batch, Postprocessing.ADVANTAGES: advantages.masked_fill(clipped, 0)}
-        return super().compute_loss_for_module(module_id=module_id, config=config, batch=batch,
+        loss = super().compute_loss_for_module(module_id=module_id, config=config, batch=batch,
                                                fwd_out=fwd_out)
+        weight = config.learner_config_dict.get(TEACHER_WEIGHT_KEY, 0.0)
+        if weight and module_id == LEARNER and TEACHER_COLUMN in batch:  # teacher.py
+            valid = (batch[Columns.LOSS_MASK].bool() if Columns.LOSS_MASK in batch
+                     else torch.ones_like(batch[TEACHER_COLUMN], dtype=torch.bool))
+            xent, agreement = teacher_loss(fwd_out[Columns.ACTION_DIST_INPUTS],
+                                           batch[TEACHER_COLUMN], valid)
+            self.metrics.log_value((module_id, "teacher_xent"), xent.item(), window=100)
+            self.metrics.log_value((module_id, "teacher_agreement"), agreement.item(),
+                                   window=100)
+            loss = loss + weight * xent
+        return loss
 
     def _log_pi_health(self, module_id: str, logits: torch.Tensor, log_ratio: torch.Tensor,
                        sampled_logp: torch.Tensor) -> None:
