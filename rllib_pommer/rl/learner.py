@@ -210,6 +210,7 @@ class PommerPPOLearner(PPOTorchLearner):
                                 lr_or_lr_schedule=config.lr)
 
     def compute_loss_for_module(self, *, module_id, config, batch, fwd_out):
+        teacher_rows = None
         if self.should_module_be_updated(module_id):  # the learner, and an exploiter (league.py)
             logits = fwd_out[Columns.ACTION_DIST_INPUTS].detach()
             module = self.module[module_id].unwrapped()
@@ -226,14 +227,13 @@ class PommerPPOLearner(PPOTorchLearner):
                 self.metrics.log_value((module_id, "pi_dual_clipped_rows"), int(clipped.sum()),
                                        reduce="sum")
                 batch = {**batch, Postprocessing.ADVANTAGES: advantages.masked_fill(clipped, 0)}
+            teacher_rows = valid & (log_ratio.abs() <= math.log1p(config.clip_param))
         loss = super().compute_loss_for_module(module_id=module_id, config=config, batch=batch,
                                                fwd_out=fwd_out)
         weight = config.learner_config_dict.get(TEACHER_WEIGHT_KEY, 0.0)
         if weight and module_id == LEARNER and TEACHER_COLUMN in batch:  # teacher.py
-            valid = (batch[Columns.LOSS_MASK].bool() if Columns.LOSS_MASK in batch
-                     else torch.ones_like(batch[TEACHER_COLUMN], dtype=torch.bool))
             xent, agreement = teacher_loss(fwd_out[Columns.ACTION_DIST_INPUTS],
-                                           batch[TEACHER_COLUMN], valid)
+                                           batch[TEACHER_COLUMN], teacher_rows)
             self.metrics.log_value((module_id, "teacher_xent"), xent.item(), window=100)
             self.metrics.log_value((module_id, "teacher_agreement"), agreement.item(),
                                    window=100)

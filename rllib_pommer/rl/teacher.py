@@ -15,10 +15,16 @@ learner sees and nothing else.
 
 The learner (learner.py) then adds w times the cross-entropy of pi's move logits against the
 teacher's moves to PPO's loss for the learner module (not an exploiter, which has no teacher
-rows), and logs the cross-entropy and how often pi's most likely move is the teacher's, each a
-mean over the last 100 minibatches (`teacher_xent`, `teacher_agreement`). PPO still decides
-what the moves are worth; the teacher only says where to look first. The teacher costs sampling
-time: one decision per learner step (the search agent's p50 is 0.4 ms: docs/measurements.md).
+rows), over the rows whose probability ratio is still inside PPO's clip (|log r| <= log(1 +
+clip)): the teacher may move pi in an iteration as far as PPO may, no further. Unbounded, the
+pull is plain behaviour cloning inside PPO: with the paper's clip of 0.01, PPO's own gradient
+vanishes from most rows after a few steps while the cross-entropy's stays, Adam scales the steps
+to it, and in `league2_kickstart`'s first try (w 0.2, unbounded) the learner lost 0.93 of its
+games by the third iteration, 1.9 of its agents a game to their own bombs (ppo_league's start:
+0.07 and 0.2): a move copied from the search agent without the escape it plans. The learner logs
+the cross-entropy and how often pi's most likely move is the teacher's, each a mean over the
+last 100 minibatches (`teacher_xent`, `teacher_agreement`). The teacher costs sampling time: one
+decision per learner step (the search agent's p50 is 0.4 ms: docs/measurements.md).
 """
 
 from __future__ import annotations
@@ -74,11 +80,12 @@ def teacher_agent(policy: str, seat: int, first_raw: np.ndarray):
 
 
 def teacher_loss(logits: torch.Tensor, teacher: torch.Tensor,
-                 valid: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+                 rows: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
     """The cross-entropy of the move logits (rows, 6+) against the teacher's moves (rows,) over
-    the valid rows, and the share of them where pi's most likely move is the teacher's."""
-    moves = logits[..., :NUM_ACTIONS][valid]
-    target = teacher.long()[valid]
+    the `rows` mask (mean; 0 with a gradient if none), and the share of them where pi's most
+    likely move is the teacher's."""
+    moves = logits[..., :NUM_ACTIONS][rows]
+    target = teacher.long()[rows]
     if not len(target):
         return logits.sum() * 0.0, torch.tensor(float("nan"))
     agreement = (moves.argmax(-1) == target).float().mean()
