@@ -15,30 +15,11 @@ from rllib_pommer.imitation.recall import MEMORY_PLANES
 from rllib_pommer.rl.config import build_config
 from rllib_pommer.runs.checkpoints import load_checkpoint_net
 
-MEMORY_SMOKE = """
-name = "memory_smoke"
-description = "Memory planes, test-sized."
-max_steps = 40
-memory = true
-[ppo]
-train_batch_size = 320
-num_epochs = 1
-num_envs_per_env_runner = 4
-[league]
-slots = 1
-gate_games = 4
-gate_win = 0.5
-[defaults]
-teammate = "learner"
-reward = "raw_kills"
-action_filter = 0.0
-jitter = 0.0
-[[stage]]
-name = "league"
-opponent = ["suicide", "ppo"]
-episodes = 100000
-self_play = true
-"""
+from .test_self_play import SELF_PLAY_SMOKE
+
+# The self-play smoke league with memory, and a 19-plane frozen opponent beside its snapshots.
+MEMORY_SMOKE = SELF_PLAY_SMOKE.replace("max_steps = 40\n", "max_steps = 40\nmemory = true\n") \
+    .replace('opponent = ["suicide", "static_action"]', 'opponent = ["suicide", "ppo"]')
 
 
 def test_a_memory_curriculum_is_checked(tmp_path):

@@ -16,26 +16,12 @@ from rllib_pommer.game.raw_codec import unpack_raw
 from rllib_pommer.rl.config import build_config
 from rllib_pommer.rl.teacher import TEACHER_COLUMN, teacher_agent, teacher_loss
 
-TEACHER_SMOKE = """
-name = "teacher_smoke"
-description = "Kickstarting, test-sized."
-max_steps = 40
-[ppo]
-train_batch_size = 320
-num_epochs = 1
-num_envs_per_env_runner = 4
-teacher = "simple"
-teacher_weight = 2.0
-[defaults]
-teammate = "learner"
-reward = "raw_kills"
-action_filter = 0.0
-jitter = 0.0
-[[stage]]
-name = "kickstart"
-opponent = "static"
-episodes = 100000
-"""
+from .test_self_play import SELF_PLAY_SMOKE
+
+# The self-play smoke league, its learner taught by SimpleAgent (cheap, and seeded like search).
+TEACHER_SMOKE = SELF_PLAY_SMOKE.replace(
+    "num_envs_per_env_runner = 4\n",
+    'num_envs_per_env_runner = 4\nteacher = "simple"\nteacher_weight = 2.0\n')
 
 
 def test_a_teacher_is_checked(tmp_path):
