@@ -29,6 +29,7 @@ from pathlib import Path
 
 from rllib_pommer.arena.records import read_records, summarise
 from rllib_pommer.data.dataset import open_dataset
+from rllib_pommer.util.errors import report_error
 
 ROOT = Path(__file__).resolve().parent.parent
 OPPONENTS = ("simple", "simple_nobomb", "static")
@@ -115,11 +116,9 @@ def main(argv: list[str] | None = None) -> int:
         if getattr(args, name) <= 0:
             parser.error(f"--{name.replace('_', '-')} must be positive, got {getattr(args, name)}")
     try:
-        table = compare(args)
+        print(compare(args))
     except (ValueError, OSError, subprocess.CalledProcessError) as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    print(table)
+        return report_error(exc)
     return 0
 
 
