@@ -120,8 +120,10 @@ FIRST_CONV = "convs.0.weight"
 
 
 def planes_of(state: dict) -> int:
-    """How many input planes a state_dict's network reads: 19, or 22 with memory."""
-    return int(state[FIRST_CONV].shape[1]) if FIRST_CONV in state else NUM_PLANES
+    """How many input planes a state_dict's network reads: 19, or 22 with memory. A state whose
+    first convolution is no 4-D kernel reads as 19, and loading it names the misfit."""
+    kernel = state.get(FIRST_CONV)
+    return int(kernel.shape[1]) if getattr(kernel, "ndim", 0) == 4 else NUM_PLANES
 
 
 def widened(state: dict, planes: int) -> dict:

@@ -14,6 +14,7 @@ import pytest
 from rllib_pommer.curriculum.curriculum import load_curriculum
 from rllib_pommer.curriculum.settings import PPOSettings, RunSettings
 from rllib_pommer.rl.config import build_config
+from rllib_pommer.rl.teacher import TEACHER_WEIGHT_KEY
 
 from ..conftest import REPO_ROOT
 from ..test_layering import _loaded
@@ -34,7 +35,7 @@ def _config_values(config: dict) -> dict:
 
 
 def test_every_setting_but_checkpointing_reaches_the_ppo_config(tmp_path):
-    assert set(CONFIG_KEYS) | {"checkpoint_every", "dual_clip"} == {
+    assert set(CONFIG_KEYS) | {"checkpoint_every", "dual_clip", "teacher", "teacher_weight"} == {
         f.name for f in dataclasses.fields(PPOSettings)}
     (tmp_path / "c.toml").write_text(
         "[ppo]\nlr = 3e-4\nlambda = 0.9\nnum_epochs = 2\ndual_clip = 3\n" + STAGE)
@@ -43,7 +44,10 @@ def test_every_setting_but_checkpointing_reaches_the_ppo_config(tmp_path):
     expected = dataclasses.asdict(curriculum.ppo)
     del expected["checkpoint_every"]  # Tune's, not PPO's: launch/training.py
     config = build_config(curriculum, restore_from=Path("checkpoint")).to_dict()
-    assert config["learner_config_dict"] == {"dual_clip": expected.pop("dual_clip")}  # learner.py
+    del expected["teacher"]  # the connector's (teacher.py), tested in test_teacher.py
+    assert config["learner_config_dict"] == {  # learner.py; no teacher, no teacher loss
+        "dual_clip": expected.pop("dual_clip"), TEACHER_WEIGHT_KEY: 0.0}
+    del expected["teacher_weight"]
     assert _config_values(config) == expected
 
 
