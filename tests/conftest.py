@@ -17,12 +17,17 @@ DECISIONS = REFERENCE_DIR / "simpleagent_decisions_public.json"
 PAPER_TABLES = REFERENCE_DIR / "paper_tables.tex"
 
 
-def benchmark_main(name: str):
-    """The `main` of `benchmarks/<name>.py`, loaded from its file (benchmarks/ is no package)."""
+def benchmark_module(name: str):
+    """`benchmarks/<name>.py`, loaded from its file (benchmarks/ is no package)."""
     spec = importlib.util.spec_from_file_location(name, REPO_ROOT / "benchmarks" / f"{name}.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
-    return module.main
+    return module
+
+
+def benchmark_main(name: str):
+    """The `main` of `benchmarks/<name>.py`."""
+    return benchmark_module(name).main
 
 
 @pytest.fixture(scope="session")
