@@ -485,7 +485,7 @@ def hunt_targets(board, alive, me, game_type, step, memory, targets):
 @njit(cache=True)
 def _decide_rows(board, blast, life, direction, flame, position, ammo, strength, can_kick, alive,
                  agent_id, game_type, step, active, memory, rng, depth, horizon, recall, belief,
-                 draws, counts):
+                 draws, counts, values):
     m_rows = board.shape[0]
     out = np.zeros(m_rows, np.int64)
     s_board, s_agents, s_bombs, s_flames, s_items, s_meta, s_radio = belief
@@ -506,6 +506,7 @@ def _decide_rows(board, blast, life, direction, flame, position, ammo, strength,
         hunt = hunt_distances(s_board, targets, n_targets)
         value = root_values(s_board, s_agents, s_bombs, s_flames, s_items, s_meta, s_radio, me,
                             game_type[m], depth, horizon, hunt)
+        values[m] = value
         if draws > 0:
             count_draws(value, rng[m], draws, counts[m])
         out[m] = pick(value, rng, m)
@@ -536,11 +537,21 @@ def search_decisions(obs: Observation, memory: np.ndarray, effort: Effort,
     their own, so the actions and the memory are those of `search_actions`); all zero without
     draws or where `active` is False. The counts estimate the agent's action distribution: its
     only randomness is that draw."""
+    actions, counts, _ = search_values(obs, memory, effort, active, draws)
+    return actions, counts
+
+
+def search_values(obs: Observation, memory: np.ndarray, effort: Effort,
+                  active: np.ndarray | None = None,
+                  draws: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """`search_decisions`'s actions and counts, and (M, 6) the value of each action at the root
+    (`root_values`: -inf for an action that plays as Stop; zero where `active` is False)."""
     if not 0 <= draws < 256:
         raise ValueError(f"draws must be in 0..255 (counts are stored as uint8), got {draws}")
     rows = obs.board.shape[0]
     active = np.ones(rows, np.bool_) if active is None else np.asarray(active, np.bool_)
     counts = np.zeros((rows, NUM_ACTIONS), np.uint8)
+    values = np.zeros((rows, NUM_ACTIONS))
     rng = np.ascontiguousarray(memory[:, RNG]).view(np.uint64)
     actions = _decide_rows(
         np.ascontiguousarray(obs.board, np.uint8),
@@ -557,9 +568,9 @@ def search_decisions(obs: Observation, memory: np.ndarray, effort: Effort,
         np.ascontiguousarray(obs.game_type, np.int64),
         np.ascontiguousarray(obs.step_count, np.int64),
         active, memory, rng, effort.depth, effort.horizon, effort.recall, empty_belief(),
-        draws, counts)
+        draws, counts, values)
     memory[:, RNG] = rng.view(np.int64)
-    return actions, counts
+    return actions, counts, values
 
 
 class SearchAgent:
