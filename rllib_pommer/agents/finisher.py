@@ -11,7 +11,6 @@ left without a way out, 2,000) and the dangers the search sees (cornered 5,000, 
 doomed 10,000,000) above `margin`'s default of 1,000, and the hunt and room terms (tens) far
 below: the search takes over to finish an enemy or to escape, and the inner policy plays the
 rest. Its seat's search memory records the move actually played, as the search agent's own does.
-`overruled` and `moves` count this game's overrides and moves.
 """
 
 from __future__ import annotations
@@ -22,7 +21,7 @@ from ..game.constants import Action
 from ..game.observation import Observation
 from .base import Agent
 from .belief import LAST_ACTION
-from .registry import PolicySpec, make_agent, register_kind
+from .registry import PolicySpec, looks_like_path, make_agent, register_kind
 from .search import Effort, new_memory, search_values
 
 STOP = int(Action.STOP)
@@ -39,23 +38,18 @@ class Finisher:
         self.effort = effort or Effort()
         self.margin = margin
         self.memory = new_memory(1, np.random.default_rng(0))
-        self.overruled = self.moves = 0
 
     def reset(self, agent_id: int, game_type: int, rng: np.random.Generator) -> None:
         self.inner.reset(agent_id, game_type, rng)
         self.memory = new_memory(1, rng.spawn(1)[0])  # the inner agent's draws stay its own
-        self.overruled = self.moves = 0
 
     def act(self, obs: Observation) -> int:
         action = int(self.inner.act(obs))
-        rows = Observation._make([np.asarray(field)[None] for field in obs])
-        best, _, values = search_values(rows, self.memory, self.effort)
+        best, _, values = search_values(obs.as_row(), self.memory, self.effort)
         value = values[0]
         own = value[action] if np.isfinite(value[action]) else value[STOP]  # plays as Stop
-        self.moves += 1
         if value[best[0]] - own >= self.margin:
             action = int(best[0])
-            self.overruled += 1
         self.memory[0, LAST_ACTION] = action
         return action
 
@@ -63,9 +57,8 @@ class Finisher:
 def from_spec(spec: PolicySpec) -> Finisher:
     """The agent a `finish` policy file describes: its `policy` (resolved from the file's folder
     when it is a path), the search effort of its keys and its `margin`."""
-    inner_name = str(spec.params["policy"])
-    if inner_name.endswith(".toml"):
-        inner_name = str(spec.file("policy"))
+    inner = spec.params["policy"]
+    inner_name = str(spec.file("policy")) if looks_like_path(inner) else inner
     effort = Effort.from_params({key: spec.params[key] for key in ("depth", "horizon", "recall")
                                  if key in spec.params}, str(spec.path))
     try:

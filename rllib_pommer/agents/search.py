@@ -589,5 +589,4 @@ class SearchAgent:
         self.memory = new_memory(1, rng)
 
     def act(self, obs: Observation) -> int:
-        rows = Observation._make([np.asarray(field)[None] for field in obs])
-        return int(search_actions(rows, self.memory, self.effort)[0])
+        return int(search_actions(obs.as_row(), self.memory, self.effort)[0])

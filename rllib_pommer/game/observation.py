@@ -50,6 +50,11 @@ class Observation(NamedTuple):
         """The observation(s) at a leading index, e.g. `obs.select(n, agent)` for one agent."""
         return Observation(*(field[index] for field in self))
 
+    def as_row(self) -> Observation:
+        """One agent's observation (leading shape ()) as a batch of one row (leading shape (1,)),
+        for the batched deciders; scalar fields become arrays of one."""
+        return Observation(*(np.asarray(field)[None] for field in self))
+
     def agent_rows(self) -> Observation:
         """The (N, 4, ...) observations of N games as (N * 4, ...) rows (views, no copy)."""
         return Observation(*(f.reshape((-1,) + f.shape[2:]) for f in self))

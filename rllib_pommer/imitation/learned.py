@@ -210,7 +210,7 @@ class LearnedAgent:
 
     def act(self, obs: Observation) -> int:
         if self.pending is None:
-            self.policy.prefetch([self], Observation(*(f[None] for f in obs)))
+            self.policy.prefetch([self], obs.as_row())
         (move, self.said), self.pending = self.pending, None
         return move
 

@@ -8,12 +8,8 @@ from rllib_pommer.game.constants import Action
 from ..conftest import benchmark_module
 
 
-def _script():
-    return benchmark_module("bomb_waits")
-
-
 def test_simple_agent_steps_off_its_fresh_bomb(tiny_dataset, capsys):
-    script = _script()
+    script = benchmark_module("bomb_waits")
     counts = script.waits(str(tiny_dataset))
     fresh = counts[9]
     assert fresh.sum() >= 20  # the six games lay bombs
@@ -26,5 +22,5 @@ def test_simple_agent_steps_off_its_fresh_bomb(tiny_dataset, capsys):
 
 
 def test_a_missing_dataset_is_named(tmp_path, capsys):
-    assert _script().main([str(tmp_path / "nowhere")]) == 2
+    assert benchmark_module("bomb_waits").main([str(tmp_path / "nowhere")]) == 2
     assert "nowhere does not exist" in capsys.readouterr().err
