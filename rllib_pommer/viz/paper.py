@@ -106,9 +106,10 @@ BEYOND_THE_PAPER = {"ppo_team": "ppo", "ppo_dual_clip": "ppo", "ppo_league": "pp
 
 def paper_table(team: str) -> tuple[str, dict[str, dict[str, Cell]]] | None:
     """The paper's table our team `team` is measured against: by name, a version or a variant
-    of a policy (`imitation_v1`, `imitation_v2`) by the name without that suffix, a recipe of
-    ours by the paper agent it sets out to beat."""
-    for name in (team, re.sub(r"_v\d+$", "", team), BEYOND_THE_PAPER.get(team, "")):
+    of a policy (`imitation_v1`, `ppo_league_v1`) by the name without that suffix, a recipe of
+    ours (or a version of one) by the paper agent it sets out to beat."""
+    base = re.sub(r"_v\d+$", "", team)
+    for name in (team, base, BEYOND_THE_PAPER.get(team, ""), BEYOND_THE_PAPER.get(base, "")):
         if name in PAPER_TABLES:
             return PAPER_TABLES[name]
     return None

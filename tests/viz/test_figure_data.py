@@ -91,6 +91,7 @@ def test_versions_of_our_teams_meet_the_paper_table_of_their_family():
     assert paper_table("imitation_v1") is paper_table("imitation") is PAPER_TABLES["imitation"]
     assert paper_table("imitation_v2") is PAPER_TABLES["imitation"]
     assert paper_table("ppo_v2") is PAPER_TABLES["ppo"]
+    assert paper_table("ppo_league_v1") is PAPER_TABLES["ppo"]  # a version of a recipe of ours
     assert paper_table("ppo_team") is PAPER_TABLES["ppo"]  # ours, beside the agent it would beat
     assert paper_table("ppo_cautious") is None and paper_table("simple") is None
 
