@@ -41,6 +41,7 @@ valid choices, so a typo fails before Ray starts: this module imports neither Ra
 
 from __future__ import annotations
 
+import hashlib
 import json
 import re
 import sys
@@ -334,6 +335,7 @@ def load_curriculum(name_or_path: str | Path) -> Curriculum:
 # The curriculum a run trains on, noted in its folder when it starts (`record_run_curriculum`):
 # a shipped one by its name (the run may move to another clone), another by its file's path.
 RUN_CURRICULUM_FILE = "curriculum.json"
+PI_START_KEY = "pi_start_sha256"  # in it: the digest of the weights the run began with
 DEFAULT_CURRICULUM = "quick"
 # How a trial's params.json names its curriculum (the repr of the curriculum callback's partial
 # in the config of runs started before runs noted theirs): such a run is read from there.
@@ -361,11 +363,28 @@ def curriculum_ref(curriculum: Curriculum) -> str:
     return shipped_name(curriculum.path) or str(curriculum.path.resolve())
 
 
-def record_run_curriculum(run: Path, curriculum: Curriculum) -> None:
-    """Note in the run folder which curriculum the run trains on."""
+def record_run_curriculum(run: Path, curriculum: Curriculum, pi_start: Path | None = None) -> None:
+    """Note in the run folder which curriculum the run trains on and, when it starts from a
+    weights file (`pi_start`), that file's SHA-256: the file may be replaced later (a policy
+    shipped again under its name), the digest still proves which weights the run began with.
+    A resume (no `pi_start`) keeps the digest noted at the start."""
     Path(run).mkdir(parents=True, exist_ok=True)
+    digest = (hashlib.sha256(Path(pi_start).read_bytes()).hexdigest() if pi_start
+              else run_start_digest(run))
     (Path(run) / RUN_CURRICULUM_FILE).write_text(json.dumps(
-        {"curriculum": curriculum_ref(curriculum), "name": curriculum.name}) + "\n")
+        {"curriculum": curriculum_ref(curriculum), "name": curriculum.name}
+        | ({PI_START_KEY: digest} if digest else {})) + "\n")
+
+
+def run_start_digest(run: Path) -> str | None:
+    """The SHA-256 of the weights file the run's pi started from, as its `RUN_CURRICULUM_FILE`
+    notes it (None for runs started before runs noted it, or without one)."""
+    note = Path(run) / RUN_CURRICULUM_FILE
+    try:
+        digest = json.loads(note.read_text()).get(PI_START_KEY) if note.is_file() else None
+    except (ValueError, AttributeError) as exc:
+        raise ValueError(f"{note}: unreadable ({type(exc).__name__}: {exc})") from None
+    return digest if isinstance(digest, str) else None
 
 
 def _recorded(run: Path) -> tuple[str, str, str] | None:

@@ -148,7 +148,8 @@ def start_run(settings: RunSettings, say=print) -> tuple[Curriculum, Path, Path 
         raise
     if settings.address is not None:  # a cluster: note the driver alone, for `train --stop`
         ray_session.record(out, cluster=True)
-    record_run_curriculum(out, curriculum)
+    record_run_curriculum(out, curriculum,
+                          pi_start=None if start else settings.pi_weights or curriculum.pi_weights)
     say(f"TensorBoard: tensorboard --logdir {out} (Tune's own hint below names a folder of the "
         f"Ray session under /tmp/ray, not the run's)")
     return curriculum, out, start

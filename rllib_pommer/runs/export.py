@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import csv
 import dataclasses
+import hashlib
 import io
 import json
 import subprocess
@@ -19,7 +20,7 @@ from pathlib import Path
 import torch
 
 from ..agents.registry import policy_names, resolve_policy
-from ..curriculum.curriculum import Curriculum, run_curriculum
+from ..curriculum.curriculum import Curriculum, run_curriculum, run_start_digest
 from ..imitation.learned import load_policy_net
 from .checkpoints import (
     ALGORITHM_STATE,
@@ -118,21 +119,26 @@ def _packed_iteration(run: Path, commit: str, trial_name: str) -> int | None:
 
 
 def starting_policy(run: Path, curriculum: Curriculum, exclude: str = "") -> str | None:
-    """The shipped learned policy pi started from, proven by equal weights: where the first stage
-    froze pi, the checkpoint kept at its end (`<run>/stages/1-<name>`) holds pi as the run began.
-    The weights file a run was started from may have been replaced since (`imitation` was
-    retrained after the paper run started from it), so its path proves nothing. None when the
-    first stage trained pi, its checkpoint is missing, or no policy but `exclude` matches."""
+    """The shipped learned policy pi started from, proven by equal weights: the digest of the
+    weights file the run began with, noted in its folder (`run_start_digest`), or, for runs
+    started before runs noted it, where the first stage froze pi, the checkpoint kept at its end
+    (`<run>/stages/1-<name>`), which holds pi as the run began. The weights file a run was
+    started from may have been replaced since (`imitation` was retrained after the paper run
+    started from it, `ppo_league` shipped again), so its path proves nothing. None when neither
+    proof is there or no policy but `exclude` matches."""
+    learned = [name for name in policy_names()
+               if name != exclude and resolve_policy(name).kind == "learned"]
+    digest = run_start_digest(run)
+    if digest:
+        return next((name for name in learned if hashlib.sha256(
+            resolve_policy(name).file("weights").read_bytes()).hexdigest() == digest), None)
     first = curriculum.stages[0]
     stage_end = run / "stages" / f"1-{first.name}"
     if not first.freeze_pi or not (stage_end / MODULE_STATE).is_file():
         return None
     start = load_checkpoint_net(stage_end).state_dict()
-    for name in policy_names():
-        spec = resolve_policy(name)
-        if name == exclude or spec.kind != "learned":
-            continue
-        weights = load_policy_net(spec.file("weights")).state_dict()
+    for name in learned:
+        weights = load_policy_net(resolve_policy(name).file("weights")).state_dict()
         # a Team net's keys: all of a PommerNet's, and a RadioNet's but hearing and speaking
         if all(key in start and torch.equal(start[key], value) for key, value in weights.items()):
             return name

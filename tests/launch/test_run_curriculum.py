@@ -5,6 +5,7 @@ that notes what it was given."""
 
 from __future__ import annotations
 
+import hashlib
 import json
 import shutil
 from pathlib import Path
@@ -12,7 +13,12 @@ from types import SimpleNamespace
 
 import pytest
 
-from rllib_pommer.curriculum.curriculum import RUN_CURRICULUM_FILE, curriculum_dir
+from rllib_pommer.curriculum.curriculum import (
+    PI_START_KEY,
+    RUN_CURRICULUM_FILE,
+    curriculum_dir,
+    load_curriculum,
+)
 from rllib_pommer.launch import training
 from rllib_pommer.train import main as train_main
 
@@ -67,10 +73,12 @@ def test_a_new_run_notes_its_curriculum_and_a_resume_without_curriculum_uses_it(
         tmp_path, trained, capsys):
     run = tmp_path / "run"
     assert main(["--curriculum", "smoke", "--out", str(run)]) == 0
-    assert json.loads((run / RUN_CURRICULUM_FILE).read_text()) == {"curriculum": "smoke",
-                                                                   "name": "smoke"}
+    start = hashlib.sha256(load_curriculum("smoke").pi_weights.read_bytes()).hexdigest()
+    noted = {"curriculum": "smoke", "name": "smoke", PI_START_KEY: start}
+    assert json.loads((run / RUN_CURRICULUM_FILE).read_text()) == noted
     _started(run)
     assert main(["--out", str(run), "--resume"]) == 0  # the README's command, no --curriculum
+    assert json.loads((run / RUN_CURRICULUM_FILE).read_text()) == noted  # the start stays
     assert [c.name for c in trained] == ["smoke", "smoke"]
     assert f"done: {run}" in capsys.readouterr().out
 
@@ -105,8 +113,8 @@ def test_a_curriculum_file_is_remembered_by_its_path_whatever_name_it_takes(
                     .replace('name = "smoke"', 'name = "quick"'))
     run = tmp_path / "run"
     assert main(["--curriculum", str(mine), "--out", str(run)]) == 0
-    assert json.loads((run / RUN_CURRICULUM_FILE).read_text()) == {
-        "curriculum": str(mine.resolve()), "name": "quick"}
+    noted = json.loads((run / RUN_CURRICULUM_FILE).read_text())
+    assert (noted["curriculum"], noted["name"]) == (str(mine.resolve()), "quick")
     _started(run)
     assert main(["--out", str(run), "--resume", "--curriculum", "quick"]) == 2
     assert (f"trains on curriculum 'quick' ({mine.resolve()}), not 'quick'"

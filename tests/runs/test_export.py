@@ -19,6 +19,7 @@ import pytest
 import torch
 
 from rllib_pommer.arena.match import MatchSpec, play_match
+from rllib_pommer.curriculum.curriculum import PI_START_KEY, RUN_CURRICULUM_FILE
 from rllib_pommer.data.collector import Collection, Dagger
 from rllib_pommer.game.constants import NUM_AGENTS
 from rllib_pommer.game.engine import Games
@@ -172,6 +173,20 @@ def test_the_card_names_the_shipped_policy_pi_started_from(tmp_path):
         card = (target / "MODEL_CARD.md").read_text()
         assert ("pi started from `imitation_v2`" in card) == (expected is not None)
         assert ("pi started from" in card) == (expected is not None)
+
+
+def test_a_run_that_noted_the_digest_of_its_start_names_that_policy(tmp_path):
+    """A run whose first stage trains pi (no frozen warm-up to compare) proves its start by the
+    digest of the weights file it began with, noted when it started: the policy whose weights
+    have that digest is named whatever pi became, and a digest no policy has names none."""
+    ppo = hashlib.sha256((REPO / "policies/ppo/pi.pt").read_bytes()).hexdigest()
+    for run, digest, expected in (("from_ppo", ppo, "ppo"), ("from_elsewhere", "0" * 64, None)):
+        _fake_run(tmp_path / run, PommerNet())  # pi trained away from any start
+        (tmp_path / run / RUN_CURRICULUM_FILE).write_text(json.dumps(
+            {"curriculum": "smoke", "name": "smoke", PI_START_KEY: digest}))
+        target = tmp_path / f"{run}_policy"
+        assert main(["--out", str(tmp_path / run), "--export", str(target)]) == 0
+        assert json.loads((target / "source.json").read_text())["pi_start"] == expected
 
 
 def test_the_card_counts_the_games_from_the_imitation_clone_through_the_lineage(tmp_path):
