@@ -46,12 +46,21 @@ def _schedule(curriculum: dict) -> str:
     return "\n".join(lines)
 
 
+def _planes(curriculum: dict) -> str:
+    """What pi reads: the paper's planes, and the memory planes where the run kept memory."""
+    if curriculum.get("memory"):
+        return ("22 feature planes (the paper's 19, then three of what each agent saw under the "
+                "fog, so it plays with a memory of its own observations)")
+    return "19 feature planes"
+
+
 def _start_lines(source: dict, games: int) -> list[str]:
     """Where pi began, where `runs/export.starting_policy` could prove it, and the games
     counted from the clone its lineage starts at (`history.lineage`)."""
     if not source.get("pi_start"):
         return []
-    lines = [f"- pi started from `{source['pi_start']}` (its `pi.pt` equals pi at the end of the "
+    lines = [f"- pi started from `{source['pi_start']}` (proven by equal weights: its `pi.pt` is "
+             f"the file whose digest the run noted at its start, or equals pi at the end of the "
              f"run's pi-frozen first stage)"]
     chain = source.get("lineage") or []
     if len(chain) > 1:
@@ -86,7 +95,7 @@ def _preface(source: dict, training: Training) -> list[str]:
         f"exported from `{source['checkpoint']}` at training iteration {source['iteration']:,}: "
         f"{games:,} of {total:,} games, {status}. {NETS[curriculum.get('game', 'team')]} "
         f"(`pi.pt`, a plain state_dict "
-        f"for `torch.load(weights_only=True)`), 19 feature planes, sampling its actions as it "
+        f"for `torch.load(weights_only=True)`), {_planes(curriculum)}, sampling its actions as it "
         f"did in training; the variants `{source['policy']}_jitter`, `_action` and "
         f"`_jitter_action` add the paper's filters.",
         "## Training",

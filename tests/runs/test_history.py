@@ -322,7 +322,8 @@ def _continued_run(folder, start_weights):
 
 @pytest.mark.parametrize(("policy", "before"), [
     ("ppo", ("ppo",)),  # paper_dual_clip, the first leagues
-    ("ppo_league", ("ppo", "ppo_league")),  # the second leagues: ppo_league's lineage adds up
+    ("ppo_league_v1", ("ppo", "ppo_league_v1")),  # the second leagues: the lineage adds up
+    ("ppo_league", ("ppo", "ppo_league_v1", "ppo_league")),  # a run from the second league's agent
     ("imitation", ()),  # a run from the clone starts at 0
 ])
 def test_a_continued_run_starts_at_the_games_of_the_policy_it_continued(tmp_path, policy,
