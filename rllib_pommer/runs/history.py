@@ -499,7 +499,8 @@ def write_origin(origin: Origin, folder: Path) -> None:
 
 def shipped_policy(weights: Path) -> str | None:
     """The shipped learned policy whose weights file `weights` is (the one named like the
-    weights' folder first, where two policy files play one weights file), None for any other file."""
+    weights' folder first, where two policy files play one weights file), None for any other
+    file."""
     weights = Path(weights).resolve()
     for name in sorted(policy_names(), key=lambda name: name != weights.parent.name):
         spec = resolve_policy(name)
