@@ -41,7 +41,6 @@ valid choices, so a typo fails before Ray starts: this module imports neither Ra
 
 from __future__ import annotations
 
-import hashlib
 import json
 import re
 import sys
@@ -61,6 +60,7 @@ from ..agents.registry import (
 )
 from ..game.constants import TEAM_GAMES, TEAM_PRESET
 from ..game.rewards import REWARD_MODES
+from ..util.digest import file_sha256
 from ..util.shipped import data_dir
 from ..util.toml_values import fits
 from .names import EXPLOITER, LEARNER
@@ -369,8 +369,7 @@ def record_run_curriculum(run: Path, curriculum: Curriculum, pi_start: Path | No
     shipped again under its name), the digest still proves which weights the run began with.
     A resume (no `pi_start`) keeps the digest noted at the start."""
     Path(run).mkdir(parents=True, exist_ok=True)
-    digest = (hashlib.sha256(Path(pi_start).read_bytes()).hexdigest() if pi_start
-              else run_start_digest(run))
+    digest = file_sha256(pi_start) if pi_start else run_start_digest(run)
     (Path(run) / RUN_CURRICULUM_FILE).write_text(json.dumps(
         {"curriculum": curriculum_ref(curriculum), "name": curriculum.name}
         | ({PI_START_KEY: digest} if digest else {})) + "\n")

@@ -12,7 +12,6 @@ may write into a directory at a time.
 from __future__ import annotations
 
 import ctypes
-import hashlib
 import os
 import signal
 import sys
@@ -24,6 +23,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from ..game.constants import TEAM_PRESET
+from ..util.digest import file_sha256
 from ..util.parallel import map_unordered
 from .dagger import Actor, check_setup, play_dagger_games
 from .expert import SearchExpert, parse_effort, play_games, play_search_games
@@ -67,10 +67,6 @@ class Dagger:
     actor_of: ActorOf
 
 
-def _sha256(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
 def plan_shards(games: int, seed: int, shard_games: int, label_draws: int = 0,
                 dagger: Dagger | None = None, expert: str = "simple") -> ShardPlan:
     """The shards of a dataset: `games` games from `seed`, `shard_games` a shard, played by four
@@ -91,7 +87,7 @@ def plan_shards(games: int, seed: int, shard_games: int, label_draws: int = 0,
         check_setup(dagger.opponents, label_draws)
         _, weights = dagger.actor_of(dagger.policy)
         players = {"agents": "dagger", "policy": dagger.policy,
-                   "policy_sha256": _sha256(weights), "opponents": ",".join(dagger.opponents)}
+                   "policy_sha256": file_sha256(weights), "opponents": ",".join(dagger.opponents)}
     return ShardPlan(games, ShardMeta(seed, 0, 0, shard_games, TEAM_PRESET.board_size,
                                       label_draws=label_draws, **players))
 
@@ -124,7 +120,7 @@ def _play(meta: ShardMeta, actor_of: ActorOf | None) -> Samples:
     if actor_of is None:
         raise ValueError(f"{meta.policy}: a DAgger shard needs the clone's actor")
     act, weights = actor_of(meta.policy)
-    if _sha256(weights) != meta.policy_sha256:
+    if file_sha256(weights) != meta.policy_sha256:
         raise ValueError(f"{meta.policy}: its weights {weights} changed since this DAgger "
                          "dataset was planned")
     return play_dagger_games(meta.seed, games, act, tuple(meta.opponents.split(",")),

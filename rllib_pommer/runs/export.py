@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import csv
 import dataclasses
-import hashlib
 import io
 import json
 import subprocess
@@ -22,6 +21,7 @@ import torch
 from ..agents.registry import policy_names, resolve_policy
 from ..curriculum.curriculum import Curriculum, run_curriculum, run_start_digest
 from ..imitation.learned import load_policy_net
+from ..util.digest import file_sha256
 from .checkpoints import (
     ALGORITHM_STATE,
     MODULE_STATE,
@@ -130,8 +130,8 @@ def starting_policy(run: Path, curriculum: Curriculum, exclude: str = "") -> str
                if name != exclude and resolve_policy(name).kind == "learned"]
     digest = run_start_digest(run)
     if digest:
-        return next((name for name in learned if hashlib.sha256(
-            resolve_policy(name).file("weights").read_bytes()).hexdigest() == digest), None)
+        return next((name for name in learned
+                     if file_sha256(resolve_policy(name).file("weights")) == digest), None)
     first = curriculum.stages[0]
     stage_end = run / "stages" / f"1-{first.name}"
     if not first.freeze_pi or not (stage_end / MODULE_STATE).is_file():

@@ -21,6 +21,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..imitation.features import NUM_PLANES
+from ..imitation.recall import MEMORY_PLANES, RECALL_PLANES
 from .report import fig3_section, tables_section
 from .training import Training
 
@@ -49,9 +51,10 @@ def _schedule(curriculum: dict) -> str:
 def _planes(curriculum: dict) -> str:
     """What pi reads: the paper's planes, and the memory planes where the run kept memory."""
     if curriculum.get("memory"):
-        return ("22 feature planes (the paper's 19, then three of what each agent saw under the "
-                "fog, so it plays with a memory of its own observations)")
-    return "19 feature planes"
+        return (f"{MEMORY_PLANES} feature planes (the paper's {NUM_PLANES}, then {RECALL_PLANES} "
+                f"of what each agent saw under the fog, so it plays with a memory of its own "
+                f"observations)")
+    return f"{NUM_PLANES} feature planes"
 
 
 def _start_lines(source: dict, games: int) -> list[str]:
