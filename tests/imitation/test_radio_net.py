@@ -10,9 +10,10 @@ import torch
 from rllib_pommer.agents.registry import policy_names, resolve_policy
 from rllib_pommer.game.constants import RADIO_PRESET, TEAM_PRESET, Item
 from rllib_pommer.game.engine import Game
-from rllib_pommer.imitation.features import featurize, message_features
+from rllib_pommer.imitation.features import NUM_PLANES, featurize, message_features
 from rllib_pommer.imitation.learned import load_policy_net
-from rllib_pommer.imitation.network import PommerNet, RadioNet
+from rllib_pommer.imitation.network import PommerNet, RadioNet, planes_of
+from rllib_pommer.imitation.recall import MEMORY_PLANES
 
 SHIPPED = [resolve_policy(name).file("weights") for name in policy_names()
            if resolve_policy(name).kind == "learned"]
@@ -31,10 +32,17 @@ def test_team_net_keys_and_shapes_are_the_shipped_files():
                           "convs.8.weight", "convs.8.bias", "head.1.weight", "head.1.bias",
                           "head.3.weight", "head.3.bias"]
     assert len(SHIPPED) >= 5
+    widths = set()
     for path in set(SHIPPED):
         state = torch.load(path, weights_only=True)
-        assert {key: tuple(value.shape) for key, value in state.items()} == team, path
-        PommerNet().load_state_dict(state)  # strict
+        planes = planes_of(state)
+        assert planes in (NUM_PLANES, MEMORY_PLANES), path
+        shaped = {key: tuple(value.shape)
+                  for key, value in PommerNet(planes=planes).state_dict().items()}
+        assert {key: tuple(value.shape) for key, value in state.items()} == shaped, path
+        PommerNet(planes=planes).load_state_dict(state)  # strict
+        widths.add(planes)
+    assert NUM_PLANES in widths  # the clone and the paper's recipes read the paper's 19 planes
 
 
 @pytest.mark.parametrize("policy", ["imitation", "ppo"])
