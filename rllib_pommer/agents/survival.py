@@ -129,3 +129,26 @@ def escape_cells(fire, blocked, row, col, cap=NO_CAP):
                 if count >= cap:
                     return count
     return count
+
+
+@njit(cache=True)
+def rooms_under_threat(board, agents, bombs, flames, items, meta, radio, horizon, cap):
+    """(4,) int64: for each living agent of a Team game, the cells it can be on after `horizon`
+    steps of the scenario in which both enemies (the seats of the other parity) lay a bomb
+    where they stand now and everybody then stands still, counted up to `cap`; 0: an enemy
+    bomb laid now would trap it. A dead agent's entry is 0. Team rewards read it as how
+    cornered each agent stands (game/rewards.py, "raw_kills_room")."""
+    size = board.shape[0]
+    fire = np.zeros((horizon, size, size), np.bool_)
+    blocked = np.zeros((horizon, size, size), np.bool_)
+    bombers = np.zeros(NUM_AGENTS, np.bool_)
+    rooms = np.zeros(NUM_AGENTS, np.int64)
+    for me in range(NUM_AGENTS):
+        if agents[me, A_ALIVE] == 0:
+            continue
+        for a in range(NUM_AGENTS):
+            bombers[a] = a % 2 != me % 2 and agents[a, A_ALIVE] != 0
+        play_scenario(board, agents, bombs, flames, items, meta, radio, me, bombers, 0, 0, fire,
+                      blocked)
+        rooms[me] = escape_cells(fire, blocked, agents[me, A_ROW], agents[me, A_COL], cap)
+    return rooms

@@ -1,19 +1,26 @@
-"""Reward modes: the paper's shaping pays an enemy's suicide, ours pay only credited kills, and
-the clock charges every game that is not won the whole clock."""
+"""Reward modes: the paper's shaping pays an enemy's suicide, ours pay only credited kills, the
+clock charges every game that is not won the whole clock, and the cornering shaping pays a
+trapped enemy's step and adds up over a game to minus where it started."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
+from rllib_pommer.agents.survival import rooms_under_threat
 from rllib_pommer.envs.team import MultiAgentTeam
 from rllib_pommer.game.constants import Action, Item
 from rllib_pommer.game.rewards import (
     CLOCK_COST,
     KILL_BONUS,
+    ROOM_CAP,
+    ROOM_HORIZON,
+    ROOM_WEIGHT,
     clock_reward,
     final_reward,
     kill_reward,
+    room_potential,
+    room_reward,
 )
 
 NO_INFO = {"result": 0}
@@ -36,20 +43,27 @@ def test_raw_kills_pays_each_credited_kill_to_the_killing_team_only():
     assert final_reward("raw_kills", 0, True, {"result": 1}, 1, ALIVE_BUT_1, killers) == 1.0
 
 
-def test_the_env_pays_a_kill_on_the_step_it_happens():
-    env = MultiAgentTeam({"reward": "raw_kills", "seed": 0})
-    env.reset()
+def _load_open_board(env, cells: dict, bombs: list, rigid: tuple = ()) -> None:
+    """An open board (passages, `rigid` walls) with the seats on `cells` and `bombs` laid."""
     state = env.game.dump()
     board = [[int(Item.PASSAGE)] * 11 for _ in range(11)]
-    cells = {0: (0, 0), 1: (5, 6), 2: (10, 10), 3: (0, 10)}
+    for row, col in rigid:
+        board[row][col] = int(Item.RIGID)
     for seat, entry in enumerate(state["agents"]):
         entry["position"] = list(cells[seat])
         board[cells[seat][0]][cells[seat][1]] = int(Item.AGENT0) + seat
-    board[5][5] = int(Item.BOMB)
-    state.update(board=board, items=[], flames=[], bombs=[
+    for bomb in bombs:
+        board[bomb["position"][0]][bomb["position"][1]] = int(Item.BOMB)
+    state.update(board=board, items=[], flames=[], bombs=bombs)
+    env.game.load(state)
+
+
+def test_the_env_pays_a_kill_on_the_step_it_happens():
+    env = MultiAgentTeam({"reward": "raw_kills", "seed": 0})
+    env.reset()
+    _load_open_board(env, {0: (0, 0), 1: (5, 6), 2: (10, 10), 3: (0, 10)}, [
         {"position": [5, 5], "bomber_id": 0, "life": 1, "blast_strength": 3,
          "moving_direction": None}])
-    env.game.load(state)
     _, rewards, terminateds, _, infos = env.step(dict.fromkeys(range(4), int(Action.STOP)))
     assert terminateds[1] and not terminateds["__all__"]
     assert rewards == {0: KILL_BONUS, 1: -1.0, 2: KILL_BONUS, 3: 0.0}
@@ -87,3 +101,55 @@ def test_the_clock_makes_every_non_win_cost_the_whole_clock_and_a_win_keep_the_r
             seen.add("win" if won else "tie" if step == 60 else "death")
     assert seen == {"win", "tie", "death"}, seen
     assert clock_reward("raw_kills", 5, 60, True, False) == 0.0
+
+
+def test_an_enemy_in_a_dead_end_beside_us_has_no_room_and_a_free_one_the_cap():
+    """Agent 1 stands in a dead end whose one way out agent 0 blocks: a bomb of agent 0 laid now
+    would trap it (room 0). Everyone else stands in the open (room ROOM_CAP); a dead seat 0."""
+    env = MultiAgentTeam({"reward": "raw_kills_room", "seed": 0})
+    env.reset()
+    _load_open_board(env, {0: (1, 5), 1: (0, 5), 2: (10, 0), 3: (9, 9)}, [],
+                     rigid=((0, 4), (0, 6)))
+    rooms, alive = env._cornering()
+    assert rooms.tolist() == [ROOM_CAP, 0, ROOM_CAP, ROOM_CAP]
+    assert room_potential(0, rooms, alive) == pytest.approx(ROOM_WEIGHT)  # enemy 1 trapped
+    assert room_potential(1, rooms, alive) == 0.0  # its enemies are free
+    state = env.game.batch.state
+    agents = state.agents[0].copy()
+    agents[1, 2] = 0  # seat 1 dead
+    assert rooms_under_threat(state.board[0], agents, state.bombs[0], state.flames[0],
+                              state.items[0], state.meta[0], state.radio[0], ROOM_HORIZON,
+                              ROOM_CAP)[1] == 0
+    assert room_potential(0, rooms, [True, False, True, True]) == 0.0
+
+
+def test_the_cornering_shaping_adds_up_to_minus_the_first_potential_over_a_game():
+    """Played out in the env: each agent's total under "raw_kills_room" minus its total under
+    "raw_kills" is minus its potential at the start, whatever was played, and the game is the
+    same; the steps in between are paid (the shaping is not nought along the way)."""
+    moved = 0
+    for seed in range(8):
+        totals, starts, lengths = {}, {}, {}
+        for mode in ("raw_kills", "raw_kills_room"):
+            env = MultiAgentTeam({"reward": mode, "seed": seed, "max_steps": 120})
+            env.reset()
+            rooms, alive = MultiAgentTeam._cornering(env)
+            starts[mode] = [room_potential(agent, rooms, alive) for agent in range(4)]
+            paid, done, steps = dict.fromkeys(range(4), 0.0), False, 0
+            rng = np.random.default_rng(seed)
+            while not done:
+                _, rewards, terminateds, _, _ = env.step(
+                    {agent: int(rng.integers(6)) for agent in env.agents})
+                steps += 1
+                for agent, reward in rewards.items():
+                    paid[agent] += reward
+                    moved += mode == "raw_kills_room" and abs(reward) > 0 and not terminateds[agent]
+                done = terminateds["__all__"]
+            totals[mode], lengths[mode] = paid, steps
+        assert lengths["raw_kills"] == lengths["raw_kills_room"]
+        for agent in range(4):
+            assert totals["raw_kills_room"][agent] - totals["raw_kills"][agent] == \
+                pytest.approx(-starts["raw_kills_room"][agent]), (seed, agent)
+    assert moved > 0
+    before = ([0, 0, ROOM_CAP, ROOM_CAP], [True] * 4)
+    assert room_reward("raw_kills", 0, before, before, False) == 0.0
