@@ -86,12 +86,17 @@ def packed_commits(run: Path, trial: Trial) -> list[str]:
     again on resume). A run set back to an earlier pack and trained again leaves commits of rows
     it abandoned (the paper campaign's collapsed run: docs/measurements.md), and a policy
     exported before the newest pack was not trained through the later ones: both are left out.
-    A commit without a history or checkpoint of the trial (an older layout) is kept."""
+    A commit that kept the checkpoint of the commit before it changed other files of the run
+    (a note in its curriculum.json) and packed nothing: it is left out. A commit without a
+    history or checkpoint of the trial (an older layout) is kept."""
     ours = {number(row.get("training_iteration")): row for row in trial.rows}
+    log = _git(run, "log", "--format=%h", "--", ".").split()
+    iterations = [_packed_iteration(run, commit, trial.path.name) for commit in log]
     commits = []
-    for commit in _git(run, "log", "--format=%h", "--", ".").split():
+    for k, (commit, iteration) in enumerate(zip(log, iterations, strict=True)):
+        if iteration is not None and k + 1 < len(log) and iterations[k + 1] == iteration:
+            continue  # the same checkpoint as the commit before: no pack
         saved = _git(run, "show", f"{commit}:./{trial.path.name}/{HISTORY_FILE}")
-        iteration = _packed_iteration(run, commit, trial.path.name)
         theirs = [row for row in csv.DictReader(io.StringIO(saved))
                   if number(row.get("training_iteration")) == iteration]
         if theirs:

@@ -268,9 +268,9 @@ def test_the_committed_campaign_exports_to_its_checkpoint(tmp_path, committed_ca
 
 
 def test_the_card_lists_the_packs_the_exported_rows_came_through(tmp_path):
-    """A run packed at iteration 2 (a row 3 logged after its checkpoint), trained on to a
-    collapse packed at 5, then set back to the first pack and trained again to 4: the policy
-    came through the first and last packs only."""
+    """A run packed at iteration 2 (a row 3 logged after its checkpoint), given a note, trained
+    on to a collapse packed at 5, then set back to the first pack and trained again to 4: the
+    policy came through the first and last packs only, and the note's commit packed nothing."""
     run = tmp_path / "campaign" / "run"
     trial = run / "PPO_pommerman_team_00000"
 
@@ -293,6 +293,9 @@ def test_the_card_lists_the_packs_the_exported_rows_came_through(tmp_path):
 
     git("init", "-q")
     first = pack(2, [100, 200, 300], "first pack")
+    (run / "curriculum.json").write_text("{}")  # a note written later: no pack
+    git("add", "-A")
+    git("-c", "user.name=t", "-c", "user.email=t@t", "commit", "-qm", "a note")
     pack(5, [100, 200, 301, 401, 501], "collapsed")
     last = pack(4, [100, 200, 302, 402], "set back and trained again")
     trial_now = read_trial(trial)
