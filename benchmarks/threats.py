@@ -15,7 +15,11 @@ bomb lands. From replays written by `evaluate --record` (team A on `seats_a`), p
   the step they appear, per game;
 - converted: the share of those threats whose threatened enemy is dead within 12 steps (the
   bomb's life, 10 steps, and its flames): an upper bound on the threats that killed, since
-  another bomb may have done it.
+  another bomb may have done it;
+- trap chances: the steps at which some living enemy, not trapped yet, would have no way out
+  if A's agents laid a bomb where they stand (and all then stood still:
+  `agents/survival.rooms_under_threat`, the cornering that `raw_kills_room` pays), per game;
+  taken: the share of those steps after which A laid a bomb.
 
 Read only: the engine's records stay the source of the results. Not part of CI: an analysis.
 """
@@ -31,8 +35,11 @@ from pathlib import Path
 
 import numpy as np
 
+from rllib_pommer.agents.survival import rooms_under_threat
 from rllib_pommer.game.blast import mark_blast
 from rllib_pommer.game.constants import BOMB_LIFE_AT_LAYING
+from rllib_pommer.game.engine import Game
+from rllib_pommer.game.rewards import ROOM_HORIZON
 
 REACH_STEPS = 12  # a bomb's 10 steps of life and its flames
 LAID_LIFE = BOMB_LIFE_AT_LAYING - 1  # in the state of the step that laid it, ticked once
@@ -84,9 +91,30 @@ def game_threats(game: dict) -> dict:
                             _in_cross(board, tuple(bomb["position"]), bomb["blast_strength"], q)]
     steps = max(len(states), 1)
     converted = sum(death_step.get(b, 10**9) - step <= REACH_STEPS for step, b in threats)
+    chances, taken = trap_chances(states, ours)
     return {"near": near / steps, "distance": distance / steps, "bombs_ours": bombs["ours"] / 2,
             "bombs_theirs": bombs["theirs"] / 2, "threats": len(threats),
-            "converted": converted, "winners": game["final_info"].get("winners", [])}
+            "converted": converted, "chances": chances, "taken": taken,
+            "winners": game["final_info"].get("winners", [])}
+
+
+def trap_chances(states: list[dict], ours: set[int]) -> tuple[int, int]:
+    """(trap chances, those taken) of team `ours` over a game's states (module docstring)."""
+    game = Game()
+    chances = taken = 0
+    for state, after in zip(states, states[1:], strict=False):
+        game.load(state)
+        arrays = game.batch.state
+        now = [array[0] for array in arrays]
+        threat = rooms_under_threat(*now, ROOM_HORIZON, 1)
+        plain = rooms_under_threat(*now, ROOM_HORIZON, 1, False)
+        alive = game.batch.alive[0]
+        if not any(alive[e] and threat[e] == 0 and plain[e] > 0
+                   for e in range(len(threat)) if e not in ours):
+            continue
+        chances += 1
+        taken += any(b["bomber_id"] in ours and b["life"] >= LAID_LIFE for b in after["bombs"])
+    return chances, taken
 
 
 def _outcome(game: dict, measures: dict) -> str:
@@ -99,8 +127,9 @@ def _outcome(game: dict, measures: dict) -> str:
 
 def table(paths: list[Path]) -> str:
     lines = ["| replays | A's outcome | games | near (share of steps within 2) | mean nearest "
-             "distance | bombs per agent, A / enemies | A's threats per game | converted |",
-             "|---|---|---|---|---|---|---|---|"]
+             "distance | bombs per agent, A / enemies | A's threats per game | converted | "
+             "trap chances per game | taken |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for path in paths:
         groups: dict[str, list[dict]] = defaultdict(list)
         label = None
@@ -116,9 +145,12 @@ def table(paths: list[Path]) -> str:
                     ("near", "distance", "bombs_ours", "bombs_theirs", "threats")}
             total = sum(r["threats"] for r in rows)
             share = sum(r["converted"] for r in rows) / total if total else float("nan")
+            chances = sum(r["chances"] for r in rows)
+            taken = sum(r["taken"] for r in rows) / chances if chances else float("nan")
             lines.append(f"| {label} | {outcome.lower()} | {len(rows)} | {mean['near']:.2f} | "
                          f"{mean['distance']:.1f} | {mean['bombs_ours']:.1f} / "
-                         f"{mean['bombs_theirs']:.1f} | {mean['threats']:.1f} | {share:.2f} |")
+                         f"{mean['bombs_theirs']:.1f} | {mean['threats']:.1f} | {share:.2f} | "
+                         f"{chances / len(rows):.1f} | {taken:.2f} |")
     return "\n".join(lines) + "\n"
 
 

@@ -132,12 +132,14 @@ def escape_cells(fire, blocked, row, col, cap=NO_CAP):
 
 
 @njit(cache=True)
-def rooms_under_threat(board, agents, bombs, flames, items, meta, radio, horizon, cap):
+def rooms_under_threat(board, agents, bombs, flames, items, meta, radio, horizon, cap,
+                       lay=True):
     """(4,) int64: for each living agent of a Team game, the cells it can be on after `horizon`
     steps of the scenario in which both enemies (the seats of the other parity) lay a bomb
-    where they stand now and everybody then stands still, counted up to `cap`; 0: an enemy
-    bomb laid now would trap it. A dead agent's entry is 0. Team rewards read it as how
-    cornered each agent stands (game/rewards.py, "raw_kills_room")."""
+    where they stand now (`lay`; else nobody does) and everybody then stands still, counted up
+    to `cap`; 0: an enemy bomb laid now would trap it (without `lay`: it is trapped already).
+    A dead agent's entry is 0. Team rewards read it as how cornered each agent stands
+    (game/rewards.py, "raw_kills_room")."""
     size = board.shape[0]
     fire = np.zeros((horizon, size, size), np.bool_)
     blocked = np.zeros((horizon, size, size), np.bool_)
@@ -147,7 +149,7 @@ def rooms_under_threat(board, agents, bombs, flames, items, meta, radio, horizon
         if agents[me, A_ALIVE] == 0:
             continue
         for a in range(NUM_AGENTS):
-            bombers[a] = a % 2 != me % 2 and agents[a, A_ALIVE] != 0
+            bombers[a] = lay and a % 2 != me % 2 and agents[a, A_ALIVE] != 0
         play_scenario(board, agents, bombs, flames, items, meta, radio, me, bombers, 0, 0, fire,
                       blocked)
         rooms[me] = escape_cells(fire, blocked, agents[me, A_ROW], agents[me, A_COL], cap)

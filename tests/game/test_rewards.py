@@ -69,30 +69,34 @@ def test_the_env_pays_a_kill_on_the_step_it_happens():
     assert rewards == {0: KILL_BONUS, 1: -1.0, 2: KILL_BONUS, 3: 0.0}
 
 
+def _random_game(mode: str, max_steps: int, seed: int) -> tuple[dict, dict, list, tuple]:
+    """A game of uniformly random moves paid `mode`: each agent's total, its (last step,
+    winners), every step's rewards of the agents that went on, and (rooms, alive) at reset."""
+    env = MultiAgentTeam({"reward": mode, "seed": seed, "max_steps": max_steps})
+    env.reset()
+    start = env._cornering()
+    paid, last, done, going_on = dict.fromkeys(range(4), 0.0), {}, False, []
+    rng = np.random.default_rng(seed)
+    while not done:
+        _, rewards, terminateds, _, infos = env.step(
+            {agent: int(rng.integers(6)) for agent in env.agents})
+        for agent, reward in rewards.items():
+            paid[agent] += reward
+            if terminateds[agent]:
+                last[agent] = (len(going_on) + 1, infos[agent].get("winners"))
+        going_on.append({a: r for a, r in rewards.items() if not terminateds[a]})
+        done = terminateds["__all__"]
+    return paid, last, going_on, start
+
+
 def test_the_clock_makes_every_non_win_cost_the_whole_clock_and_a_win_keep_the_rest():
     """Played out in the env: summed over an agent's steps, a tie and an early death both cost
     CLOCK_COST beyond "raw_kills"; a win at step t keeps CLOCK_COST * (1 - t / max_steps)."""
-    def totals(mode: str, max_steps: int, seed: int) -> tuple[dict, dict, int]:
-        env = MultiAgentTeam({"reward": mode, "seed": seed, "max_steps": max_steps})
-        env.reset()
-        paid, last, done, steps = dict.fromkeys(range(4), 0.0), {}, False, 0
-        rng = np.random.default_rng(seed)
-        while not done:
-            _, rewards, terminateds, _, infos = env.step(
-                {agent: int(rng.integers(6)) for agent in env.agents})
-            steps += 1
-            for agent, reward in rewards.items():
-                paid[agent] += reward
-                if terminateds[agent]:
-                    last[agent] = (steps, infos[agent].get("winners"))
-            done = terminateds["__all__"]
-        return paid, last, steps
-
     seen = set()
     for seed in range(12):
-        plain, _, steps = totals("raw_kills", 60, seed)
-        clock, last, same_steps = totals("raw_kills_clock", 60, seed)
-        assert steps == same_steps  # the reward changes nothing in the game
+        plain, _, steps, _ = _random_game("raw_kills", 60, seed)
+        clock, last, same_steps, _ = _random_game("raw_kills_clock", 60, seed)
+        assert len(steps) == len(same_steps)  # the reward changes nothing in the game
         for agent in range(4):
             step, winners = last[agent]
             won = bool(winners) and agent in winners
@@ -127,29 +131,15 @@ def test_the_cornering_shaping_adds_up_to_minus_the_first_potential_over_a_game(
     """Played out in the env: each agent's total under "raw_kills_room" minus its total under
     "raw_kills" is minus its potential at the start, whatever was played, and the game is the
     same; the steps in between are paid (the shaping is not nought along the way)."""
-    moved = 0
+    moved = False
     for seed in range(8):
-        totals, starts, lengths = {}, {}, {}
-        for mode in ("raw_kills", "raw_kills_room"):
-            env = MultiAgentTeam({"reward": mode, "seed": seed, "max_steps": 120})
-            env.reset()
-            rooms, alive = MultiAgentTeam._cornering(env)
-            starts[mode] = [room_potential(agent, rooms, alive) for agent in range(4)]
-            paid, done, steps = dict.fromkeys(range(4), 0.0), False, 0
-            rng = np.random.default_rng(seed)
-            while not done:
-                _, rewards, terminateds, _, _ = env.step(
-                    {agent: int(rng.integers(6)) for agent in env.agents})
-                steps += 1
-                for agent, reward in rewards.items():
-                    paid[agent] += reward
-                    moved += mode == "raw_kills_room" and abs(reward) > 0 and not terminateds[agent]
-                done = terminateds["__all__"]
-            totals[mode], lengths[mode] = paid, steps
-        assert lengths["raw_kills"] == lengths["raw_kills_room"]
+        plain, _, steps, _ = _random_game("raw_kills", 120, seed)
+        shaped, _, same_steps, (rooms, alive) = _random_game("raw_kills_room", 120, seed)
+        assert len(steps) == len(same_steps)
         for agent in range(4):
-            assert totals["raw_kills_room"][agent] - totals["raw_kills"][agent] == \
-                pytest.approx(-starts["raw_kills_room"][agent]), (seed, agent)
-    assert moved > 0
+            assert shaped[agent] - plain[agent] == \
+                pytest.approx(-room_potential(agent, rooms, alive)), (seed, agent)
+        moved = moved or steps != same_steps
+    assert moved  # paid along the way, not only at the end
     before = ([0, 0, ROOM_CAP, ROOM_CAP], [True] * 4)
     assert room_reward("raw_kills", 0, before, before, False) == 0.0
