@@ -16,9 +16,9 @@ bomb lands. From replays written by `evaluate --record` (team A on `seats_a`), p
 - converted: the share of those threats whose threatened enemy is dead within 12 steps (the
   bomb's life, 10 steps, and its flames): an upper bound on the threats that killed, since
   another bomb may have done it;
-- trap chances: the steps at which some living enemy, not trapped yet, would have no way out
-  if A's agents laid a bomb where they stand (and all then stood still:
-  `agents/survival.rooms_under_threat`, the cornering that `raw_kills_room` pays), per game;
+- trap chances: the steps at which one agent of A could lay a bomb where it stands that would
+  leave a living enemy, not trapped yet, no way out while A's agents keep theirs (everybody
+  then standing still, no other bomb laid: `agents/survival.escapes_if_bombing`), per game;
   taken: the share of those steps after which A laid a bomb.
 
 Read only: the engine's records stay the source of the results. Not part of CI: an analysis.
@@ -35,7 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rllib_pommer.agents.survival import rooms_under_threat
+from rllib_pommer.agents.survival import escapes_if_bombing, rooms_under_threat
 from rllib_pommer.game.blast import mark_blast
 from rllib_pommer.game.constants import BOMB_LIFE_AT_LAYING
 from rllib_pommer.game.engine import Game
@@ -98,6 +98,13 @@ def game_threats(game: dict) -> dict:
             "winners": game["final_info"].get("winners", [])}
 
 
+def _traps(escapes: np.ndarray, free: np.ndarray, ours: set[int]) -> bool:
+    """Whether a bomb whose outcome is `escapes` traps a `free` enemy and spares team `ours`."""
+    spared = all(escapes[a] != 0 for a in ours)  # 1, or -1: dead already
+    return spared and any(escapes[e] == 0 and free[e] for e in range(len(escapes))
+                          if e not in ours)
+
+
 def trap_chances(states: list[dict], ours: set[int]) -> tuple[int, int]:
     """(trap chances, those taken) of team `ours` over a game's states (module docstring)."""
     game = Game()
@@ -106,11 +113,8 @@ def trap_chances(states: list[dict], ours: set[int]) -> tuple[int, int]:
         game.load(state)
         arrays = game.batch.state
         now = [array[0] for array in arrays]
-        threat = rooms_under_threat(*now, ROOM_HORIZON, 1)
-        plain = rooms_under_threat(*now, ROOM_HORIZON, 1, False)
-        alive = game.batch.alive[0]
-        if not any(alive[e] and threat[e] == 0 and plain[e] > 0
-                   for e in range(len(threat)) if e not in ours):
+        free = rooms_under_threat(*now, ROOM_HORIZON, 1, False) > 0  # not trapped yet
+        if not any(_traps(escapes_if_bombing(*now, a, ROOM_HORIZON), free, ours) for a in ours):
             continue
         chances += 1
         taken += any(b["bomber_id"] in ours and b["life"] >= LAID_LIFE for b in after["bombs"])

@@ -16,8 +16,21 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..game.constants import NUM_AGENTS, Action, Item
-from ..game.state import A_ALIVE, A_COL, A_ROW
+from ..game.constants import BOMB_LIFE_AT_LAYING, NUM_AGENTS, Action, Item
+from ..game.state import (
+    A_ALIVE,
+    A_AMMO,
+    A_BLAST,
+    A_COL,
+    A_ROW,
+    B_BLAST,
+    B_COL,
+    B_DIR,
+    B_LIFE,
+    B_OWNER,
+    B_ROW,
+    M_BOMBS,
+)
 from ..game.step import step_buffers, step_game
 
 PASSAGE, RIGID, WOOD, BOMB, FLAMES, AGENT0 = (
@@ -154,3 +167,35 @@ def rooms_under_threat(board, agents, bombs, flames, items, meta, radio, horizon
                       blocked)
         rooms[me] = escape_cells(fire, blocked, agents[me, A_ROW], agents[me, A_COL], cap)
     return rooms
+
+
+@njit(cache=True)
+def escapes_if_bombing(board, agents, bombs, flames, items, meta, radio, bomber, horizon):
+    """(4,) int64: whether each living agent has a way to survive `horizon` steps if `bomber`
+    lays a bomb where it stands now and nobody lays another (1 yes, 0 no; -1 dead), the bomber
+    included. All -1 if the bomber cannot lay one now (dead, no ammo, a bomb on its cell).
+    Each agent is walked as in `play_scenario`, itself off the board."""
+    size = board.shape[0]
+    out = np.full(NUM_AGENTS, -1, np.int64)
+    row, col = agents[bomber, A_ROW], agents[bomber, A_COL]
+    count = meta[M_BOMBS]
+    if agents[bomber, A_ALIVE] == 0 or agents[bomber, A_AMMO] <= 0 or count >= bombs.shape[0]:
+        return out
+    for b in range(count):
+        if bombs[b, B_ROW] == row and bombs[b, B_COL] == col:
+            return out
+    laid, laid_meta = bombs.copy(), meta.copy()
+    laid[count, B_ROW], laid[count, B_COL], laid[count, B_OWNER] = row, col, bomber
+    laid[count, B_LIFE], laid[count, B_BLAST], laid[count, B_DIR] = (
+        BOMB_LIFE_AT_LAYING, agents[bomber, A_BLAST], 0)
+    laid_meta[M_BOMBS] = count + 1
+    fire = np.zeros((horizon, size, size), np.bool_)
+    blocked = np.zeros((horizon, size, size), np.bool_)
+    nobody = np.zeros(NUM_AGENTS, np.bool_)
+    for me in range(NUM_AGENTS):
+        if agents[me, A_ALIVE] == 0:
+            continue
+        play_scenario(board, agents, laid, flames, items, laid_meta, radio, me, nobody, 0, 0,
+                      fire, blocked)
+        out[me] = escape_cells(fire, blocked, agents[me, A_ROW], agents[me, A_COL], 1)
+    return out

@@ -9,9 +9,9 @@ An agent that dies gets its last observation and its final reward, then leaves; 
 everyone when the engine says so (a team wiped out, or the step limit, a tie). `reward_mode`
 (`game/rewards.py`: "shaped", the paper's; "raw", the engine's; "shaped_credit" and "raw_kills",
 which pay only the kills credited to the agent's team; "raw_kills_clock", which also charges the
-clock; "raw_kills_room", which also pays for cornering the enemies) decides the reward at an
-agent's last step and, for "raw_kills", on the steps its team kills (and for "raw_kills_clock"
-and "raw_kills_room" on every step).
+clock; "raw_kills_room" and "raw_kills_trap", which also pay for cornering or trapping the
+enemies) decides the reward at an agent's last step and, for "raw_kills", on the steps its team
+kills (and for the clock, cornering and trapping on every step).
 
 The final infos carry `winners` (seats, empty on a tie), `died`, `killers` (every seat's
 kill-credit mask, `game/kills.py`) and `laid` (the bombs each seat laid, as the engine counts
@@ -65,14 +65,14 @@ from ..game.engine import RADIO_ACTION_SIZE, Game
 from ..game.observation import Observation
 from ..game.raw_codec import RAW_SIZE, pack_raw
 from ..game.rewards import (
+    CORNERING_WEIGHTS,
     ROOM_CAP,
     ROOM_HORIZON,
-    ROOM_MODES,
     check_reward_mode,
     clock_reward,
+    cornering_reward,
     final_reward,
     kill_reward,
-    room_reward,
 )
 from ..imitation.features import NUM_PLANES, message_features
 from ..imitation.recall import MEMORY_PLANES, input_planes
@@ -257,7 +257,7 @@ class MultiAgentTeam:
                 actions[agent, :np.size(action)] = check_action(action, agent, radio=True)
             else:
                 actions[agent] = check_action(action, agent)
-        cornered_before = self._cornering() if self.reward_mode in ROOM_MODES else None
+        cornered_before = self._cornering() if self.reward_mode in CORNERING_WEIGHTS else None
         obs, engine_rewards, done, info = self.game.step(actions)
         self.last_observation = obs
         cornered_after = self._cornering() if cornered_before is not None else None
@@ -279,8 +279,8 @@ class MultiAgentTeam:
                              killers) if leaves else 0.0) + clock_reward(
                 self.reward_mode, step, max_steps, leaves, agent in winners)
             if cornered_before is not None:
-                rewards[agent] += room_reward(self.reward_mode, agent, cornered_before,
-                                              cornered_after, leaves)
+                rewards[agent] += cornering_reward(self.reward_mode, agent, cornered_before,
+                                                   cornered_after, leaves)
             if done:
                 infos[agent].update(winners=info.get("winners", []), killers=killers,
                                     died=(~alive).tolist(),
@@ -290,11 +290,13 @@ class MultiAgentTeam:
         terminateds["__all__"] = done
         return observations, rewards, terminateds, {"__all__": False}, infos
 
-    def _cornering(self) -> tuple[np.ndarray, np.ndarray]:
-        """(rooms, alive) of every seat now, what "raw_kills_room" pays on (game/rewards.py)."""
-        state = self.game.batch.state
-        rooms = rooms_under_threat(*(array[0] for array in state), ROOM_HORIZON, ROOM_CAP)
-        return rooms, self.game.batch.alive[0].copy()
+    def _cornering(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(rooms, trapped, alive) of every seat now, what "raw_kills_room" and
+        "raw_kills_trap" pay on (game/rewards.py)."""
+        now = [array[0] for array in self.game.batch.state]
+        rooms = rooms_under_threat(*now, ROOM_HORIZON, ROOM_CAP)
+        trapped = rooms_under_threat(*now, ROOM_HORIZON, 1, False) == 0
+        return rooms, trapped, self.game.batch.alive[0].copy()
 
     def draw(self) -> np.ndarray:
         """The whole board now, uint8 RGB (H, W, 3), drawn by the replay renderer."""

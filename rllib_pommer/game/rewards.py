@@ -22,12 +22,18 @@ An agent's last step is its death or the game's end. There `mode` decides its fi
   cornered the enemies stand. An agent's potential is ROOM_WEIGHT for each living enemy, times
   the share of ROOM_CAP cells that enemy could NOT reach alive within ROOM_HORIZON steps if the
   agent's team laid a bomb where each of them stands now (agents/survival.rooms_under_threat;
-  ROOM_CAP cells or more: 0, none: 1); each step pays the potential after it minus the
-  potential before, and an agent's last step counts the potential after as 0. The payments of
-  a game so add up to minus the potential the agent started with (nought: the game begins with
-  the enemies far), whatever it did: the shaping moves credit to the steps that corner an
-  enemy (and back out of those that let it go) without changing which play is best (up to
-  gamma 0.999's 0.1% a step).
+  ROOM_CAP cells or more: 0, none: 1);
+* "raw_kills_trap" (ours): "raw_kills", plus the same kind of shaping on the enemies already
+  trapped: TRAP_WEIGHT for each living enemy that has no way to survive ROOM_HORIZON steps if
+  nobody lays another bomb, so the step whose bomb closes the last way out is paid then, not
+  only at the kill some ten steps later.
+
+In both, each step pays the potential after it minus the potential before, and an agent's last
+step counts the potential after as 0. The payments of a game so add up to minus the potential
+the agent started with (near nought: the game begins with the enemies far), whatever it did:
+the shaping moves credit to the steps that corner or trap an enemy (and back out of those that
+let it go) without changing which play is best (up to gamma 0.999's 0.1% a step). A trapped
+enemy's death takes its potential back on the step the kill is paid.
 
 Every other step pays nothing (but the clock's share, in "raw_kills_clock"). Written here,
 below every env and the curriculum checker, so that each reads the same modes without importing
@@ -43,15 +49,19 @@ import numpy as np
 from .constants import BOMB_LIFE_AT_LAYING, NUM_AGENTS, Result
 from .kills import death_cause
 
-REWARD_MODES = ("shaped", "raw", "shaped_credit", "raw_kills", "raw_kills_clock", "raw_kills_room")
+REWARD_MODES = ("shaped", "raw", "shaped_credit", "raw_kills", "raw_kills_clock", "raw_kills_room",
+                "raw_kills_trap")
 KILL_BONUS = 0.5
 CLOCK_COST = 0.5  # what the whole clock costs in "raw_kills_clock"
 ROOM_WEIGHT = 0.2  # an enemy fully cornered, in "raw_kills_room"'s potential
+TRAP_WEIGHT = 0.3  # an enemy trapped, in "raw_kills_trap"'s potential
 ROOM_CAP = 8  # cells of room at which an enemy counts as free
-ROOM_HORIZON = BOMB_LIFE_AT_LAYING  # steps the cornering scenario runs: a bomb laid now goes off
-ROOM_MODES = ("raw_kills_room",)  # the modes that need agents/survival.rooms_under_threat
-_RAW = ("raw", "raw_kills", "raw_kills_clock", "raw_kills_room")  # the engine's outcome at the end
-_KILLS = ("raw_kills", "raw_kills_clock", "raw_kills_room")  # paid for credited kills
+ROOM_HORIZON = BOMB_LIFE_AT_LAYING  # steps the scenarios run: a bomb laid now goes off
+# The modes paid on the enemies' rooms (agents/survival.rooms_under_threat): their weights for
+# (cornered, trapped)
+CORNERING_WEIGHTS = {"raw_kills_room": (ROOM_WEIGHT, 0.0), "raw_kills_trap": (0.0, TRAP_WEIGHT)}
+_RAW = ("raw", "raw_kills", "raw_kills_clock", *CORNERING_WEIGHTS)  # the engine's outcome
+_KILLS = ("raw_kills", "raw_kills_clock", *CORNERING_WEIGHTS)  # paid for credited kills
 
 
 def check_reward_mode(mode: str) -> str:
@@ -98,17 +108,21 @@ def clock_reward(mode: str, step: int, max_steps: int, last: bool, won: bool) ->
     return -CLOCK_COST * steps / max_steps
 
 
-def room_potential(agent: int, rooms: Sequence[int], alive: Sequence[bool]) -> float:
-    """`agent`'s potential under "raw_kills_room": ROOM_WEIGHT per living enemy, scaled by the
-    share of ROOM_CAP cells its room (`rooms`, agents/survival.rooms_under_threat) lacks."""
-    return ROOM_WEIGHT * sum(1.0 - min(int(rooms[e]), ROOM_CAP) / ROOM_CAP
-                             for e in range(NUM_AGENTS) if e % 2 != agent % 2 and alive[e])
+def cornering_potential(mode: str, agent: int, rooms: Sequence[int], trapped: Sequence[bool],
+                        alive: Sequence[bool]) -> float:
+    """`agent`'s potential under `mode` (one of CORNERING_WEIGHTS): per living enemy, the
+    cornered weight scaled by the share of ROOM_CAP cells its room (`rooms`,
+    agents/survival.rooms_under_threat) lacks, plus the trapped weight if it is `trapped`."""
+    cornered, trap = CORNERING_WEIGHTS[mode]
+    return sum(cornered * (1.0 - min(int(rooms[e]), ROOM_CAP) / ROOM_CAP) + trap * bool(trapped[e])
+               for e in range(NUM_AGENTS) if e % 2 != agent % 2 and alive[e])
 
 
-def room_reward(mode: str, agent: int, before: tuple, after: tuple, last: bool) -> float:
-    """What `agent` is paid on a step for cornering its enemies: the potential after the step
-    (nought at its `last` step) minus the potential before; `before` and `after` are each
-    (rooms, alive) for every seat. Nought in the modes without the shaping."""
-    if mode not in ROOM_MODES:
+def cornering_reward(mode: str, agent: int, before: tuple, after: tuple, last: bool) -> float:
+    """What `agent` is paid on a step for cornering and trapping its enemies: the potential
+    after the step (nought at its `last` step) minus the potential before; `before` and
+    `after` are each (rooms, trapped, alive) for every seat. Nought in the other modes."""
+    if mode not in CORNERING_WEIGHTS:
         return 0.0
-    return (0.0 if last else room_potential(agent, *after)) - room_potential(agent, *before)
+    return (0.0 if last else cornering_potential(mode, agent, *after)) - \
+        cornering_potential(mode, agent, *before)

@@ -16,11 +16,12 @@ from rllib_pommer.game.rewards import (
     ROOM_CAP,
     ROOM_HORIZON,
     ROOM_WEIGHT,
+    TRAP_WEIGHT,
     clock_reward,
+    cornering_potential,
+    cornering_reward,
     final_reward,
     kill_reward,
-    room_potential,
-    room_reward,
 )
 
 NO_INFO = {"result": 0}
@@ -109,37 +110,59 @@ def test_the_clock_makes_every_non_win_cost_the_whole_clock_and_a_win_keep_the_r
 
 def test_an_enemy_in_a_dead_end_beside_us_has_no_room_and_a_free_one_the_cap():
     """Agent 1 stands in a dead end whose one way out agent 0 blocks: a bomb of agent 0 laid now
-    would trap it (room 0). Everyone else stands in the open (room ROOM_CAP); a dead seat 0."""
+    would trap it (room 0), but it is not trapped yet. Everyone else stands in the open (room
+    ROOM_CAP); a dead seat 0."""
     env = MultiAgentTeam({"reward": "raw_kills_room", "seed": 0})
     env.reset()
     _load_open_board(env, {0: (1, 5), 1: (0, 5), 2: (10, 0), 3: (9, 9)}, [],
                      rigid=((0, 4), (0, 6)))
-    rooms, alive = env._cornering()
-    assert rooms.tolist() == [ROOM_CAP, 0, ROOM_CAP, ROOM_CAP]
-    assert room_potential(0, rooms, alive) == pytest.approx(ROOM_WEIGHT)  # enemy 1 trapped
-    assert room_potential(1, rooms, alive) == 0.0  # its enemies are free
+    rooms, trapped, alive = env._cornering()
+    assert rooms.tolist() == [ROOM_CAP, 0, ROOM_CAP, ROOM_CAP] and not trapped.any()
+    now = (rooms, trapped, alive)
+    assert cornering_potential("raw_kills_room", 0, *now) == pytest.approx(ROOM_WEIGHT)
+    assert cornering_potential("raw_kills_room", 1, *now) == 0.0  # its enemies are free
+    assert cornering_potential("raw_kills_trap", 0, *now) == 0.0  # not trapped yet
     state = env.game.batch.state
     agents = state.agents[0].copy()
     agents[1, 2] = 0  # seat 1 dead
     assert rooms_under_threat(state.board[0], agents, state.bombs[0], state.flames[0],
                               state.items[0], state.meta[0], state.radio[0], ROOM_HORIZON,
                               ROOM_CAP)[1] == 0
-    assert room_potential(0, rooms, [True, False, True, True]) == 0.0
+    assert cornering_potential("raw_kills_room", 0, rooms, trapped,
+                               [True, False, True, True]) == 0.0
 
 
-def test_the_cornering_shaping_adds_up_to_minus_the_first_potential_over_a_game():
-    """Played out in the env: each agent's total under "raw_kills_room" minus its total under
+def test_the_bomb_that_closes_the_way_out_is_paid_on_its_step():
+    """Agent 0 lays its bomb at the mouth of agent 1's dead end and steps aside: under
+    "raw_kills_trap" the laying step pays TRAP_WEIGHT to agents 0 and 2 and takes it from
+    nobody else; under "raw_kills" it pays nothing."""
+    paid = {}
+    for mode in ("raw_kills", "raw_kills_trap"):
+        env = MultiAgentTeam({"reward": mode, "seed": 0})
+        env.reset()
+        _load_open_board(env, {0: (1, 5), 1: (0, 5), 2: (10, 0), 3: (9, 9)}, [],
+                         rigid=((0, 4), (0, 6)))
+        _, paid[mode], _, _, _ = env.step({0: int(Action.BOMB), 1: int(Action.STOP),
+                                           2: int(Action.STOP), 3: int(Action.STOP)})
+    assert paid["raw_kills"] == dict.fromkeys(range(4), 0.0)
+    assert paid["raw_kills_trap"] == pytest.approx({0: TRAP_WEIGHT, 1: 0.0, 2: TRAP_WEIGHT,
+                                                    3: 0.0})
+
+
+@pytest.mark.parametrize("mode", ["raw_kills_room", "raw_kills_trap"])
+def test_the_cornering_shaping_adds_up_to_minus_the_first_potential_over_a_game(mode):
+    """Played out in the env: each agent's total under `mode` minus its total under
     "raw_kills" is minus its potential at the start, whatever was played, and the game is the
     same; the steps in between are paid (the shaping is not nought along the way)."""
     moved = False
     for seed in range(8):
         plain, _, steps, _ = _random_game("raw_kills", 120, seed)
-        shaped, _, same_steps, (rooms, alive) = _random_game("raw_kills_room", 120, seed)
+        shaped, _, same_steps, start = _random_game(mode, 120, seed)
         assert len(steps) == len(same_steps)
         for agent in range(4):
             assert shaped[agent] - plain[agent] == \
-                pytest.approx(-room_potential(agent, rooms, alive)), (seed, agent)
+                pytest.approx(-cornering_potential(mode, agent, *start)), (seed, agent)
         moved = moved or steps != same_steps
     assert moved  # paid along the way, not only at the end
-    before = ([0, 0, ROOM_CAP, ROOM_CAP], [True] * 4)
-    assert room_reward("raw_kills", 0, before, before, False) == 0.0
+    before = ([0, 0, ROOM_CAP, ROOM_CAP], [True] * 4, [True] * 4)
+    assert cornering_reward("raw_kills", 0, before, before, False) == 0.0
