@@ -174,8 +174,8 @@ def escapes_if_bombing(board, agents, bombs, flames, items, meta, radio, bomber,
     """(4,) int64: whether each living agent has a way to survive `horizon` steps if `bomber`
     lays a bomb where it stands now and nobody lays another (1 yes, 0 no; -1 dead), the bomber
     included. All -1 if the bomber cannot lay one now (dead, no ammo, a bomb on its cell).
-    Each agent is walked as in `play_scenario`, itself off the board."""
-    size = board.shape[0]
+    The bomb is added to the state as laid this step, then `rooms_under_threat` plays it out
+    with no other bomb laid."""
     out = np.full(NUM_AGENTS, -1, np.int64)
     row, col = agents[bomber, A_ROW], agents[bomber, A_COL]
     count = meta[M_BOMBS]
@@ -189,13 +189,8 @@ def escapes_if_bombing(board, agents, bombs, flames, items, meta, radio, bomber,
     laid[count, B_LIFE], laid[count, B_BLAST], laid[count, B_DIR] = (
         BOMB_LIFE_AT_LAYING, agents[bomber, A_BLAST], 0)
     laid_meta[M_BOMBS] = count + 1
-    fire = np.zeros((horizon, size, size), np.bool_)
-    blocked = np.zeros((horizon, size, size), np.bool_)
-    nobody = np.zeros(NUM_AGENTS, np.bool_)
-    for me in range(NUM_AGENTS):
-        if agents[me, A_ALIVE] == 0:
-            continue
-        play_scenario(board, agents, laid, flames, items, laid_meta, radio, me, nobody, 0, 0,
-                      fire, blocked)
-        out[me] = escape_cells(fire, blocked, agents[me, A_ROW], agents[me, A_COL], 1)
+    escapes = rooms_under_threat(board, agents, laid, flames, items, laid_meta, radio, horizon,
+                                 1, False)
+    for a in range(NUM_AGENTS):
+        out[a] = escapes[a] if agents[a, A_ALIVE] != 0 else -1
     return out

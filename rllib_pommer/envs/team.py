@@ -222,6 +222,7 @@ class MultiAgentTeam:
                        config.get("jitter", 0.0))
         self._filters: dict[str, bool] = {}
         self.last_observation: Observation | None = None
+        self._cornered: tuple | None = None  # `_cornering()` after the last step
 
     def set_stage(self, reward: str, action_filter: float, jitter: float) -> None:
         self.reward_mode = check_reward_mode(reward)
@@ -232,6 +233,7 @@ class MultiAgentTeam:
         if seed is not None:
             self._rng = np.random.default_rng(seed)
         self.last_observation = self.game.reset(int(self._rng.integers(2**31)))
+        self._cornered = None
         if self.memory is not None:
             self.memory[:] = 0  # a fresh memory for each seat's new game
         self._filters = {name: bool(self._rng.random() < p)
@@ -257,10 +259,13 @@ class MultiAgentTeam:
                 actions[agent, :np.size(action)] = check_action(action, agent, radio=True)
             else:
                 actions[agent] = check_action(action, agent)
-        cornered_before = self._cornering() if self.reward_mode in CORNERING_WEIGHTS else None
+        cornered_before = None
+        if self.reward_mode in CORNERING_WEIGHTS:  # the last step's "after", unless reset since
+            cornered_before = self._cornered if self._cornered is not None else self._cornering()
         obs, engine_rewards, done, info = self.game.step(actions)
         self.last_observation = obs
-        cornered_after = self._cornering() if cornered_before is not None else None
+        cornered_after = self._cornered = \
+            self._cornering() if cornered_before is not None else None
         alive = self.game.batch.alive[0]
         killers = self.game.batch.killers[0].tolist()
         step, max_steps = int(obs.step_count.max()), self.game.config.max_steps

@@ -34,6 +34,7 @@ REWARD_AXES = {"shaped": "shaped reward (the paper's)", "raw": "raw reward (the 
                "raw_kills": "raw reward + 0.5 a credited kill (ours)",
                "raw_kills_clock": "raw reward + 0.5 a credited kill - the clock (ours)",
                "raw_kills_room": "raw reward + 0.5 a credited kill + cornering (ours)",
+               "raw_kills_trap": "raw reward + 0.5 a credited kill + trapping (ours)",
                "": "reward kind not logged"}
 
 

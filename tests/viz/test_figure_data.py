@@ -10,8 +10,15 @@ import re
 import numpy as np
 import pytest
 
+from rllib_pommer.game.rewards import REWARD_MODES
 from rllib_pommer.viz.behaviour import Heatmaps, heatmaps_by_opponent, to_top_left
-from rllib_pommer.viz.figures import FIG5_MARKS, plot_behaviour, plot_outcomes, plot_training
+from rllib_pommer.viz.figures import (
+    FIG5_MARKS,
+    REWARD_AXES,
+    plot_behaviour,
+    plot_outcomes,
+    plot_training,
+)
 from rllib_pommer.viz.matches import Match, load_outcomes, match_of
 from rllib_pommer.viz.paper import FIG3_CLAIMS, PAPER_OPPONENTS, PAPER_TABLES, paper_table
 from rllib_pommer.viz.report import fig3_readings
@@ -114,6 +121,7 @@ def test_fig3_draws_one_axis_per_reward_kind_and_says_what_its_mean_is_over(tmp_
     assert [len(ax.get_lines()) for ax in fig.axes] == [1 + 1, 1 + 1]  # segment + phase line
     with pytest.raises(ValueError, match="unknown reward kind"):
         plot_training([curve("x", ["dense"] * 4)], tmp_path / "fig3.png")
+    assert set(REWARD_MODES) <= set(REWARD_AXES)  # every mode a run can train on has its axis
 
 
 def test_fig5_names_its_policies_and_explains_its_marks(tmp_path):
